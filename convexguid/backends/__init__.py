@@ -1,0 +1,34 @@
+"""Convex solver backends, looked up by name.
+
+Every SCP subproblem reaches a backend as a :class:`ConicProgram` in Clarabel's
+standard form
+
+.. math::
+
+    \\min_x \\tfrac12 x^T P x + q^T x \\quad \\text{s.t.}\\quad A x + s = b,\\; s \\in \\mathcal K,
+
+with :math:`\\mathcal K` a product of zero cones (equalities), nonnegative cones
+(:math:`A x \\le b`) and second-order cones, in that order. A backend is set up
+once and then receives new numbers with the same sparsity pattern every SCP
+iteration (:meth:`Backend.update`), so persistent solvers skip their symbolic
+factorisation.
+
+Names: ``clarabel`` (default, QP and SOCP), ``osqp`` (QP only), and
+``qpsolvers:<solver>`` for every QP solver that :mod:`qpsolvers` finds installed
+(re-solved from scratch each time: meant for cross-checks).
+"""
+
+from __future__ import annotations
+
+from convexguid.backends.base import Backend, BackendResult, Cones, ConicProgram
+from convexguid.backends.registry import available_backends, check_backend_name, make_backend
+
+__all__ = [
+    "Backend",
+    "BackendResult",
+    "ConicProgram",
+    "Cones",
+    "available_backends",
+    "check_backend_name",
+    "make_backend",
+]

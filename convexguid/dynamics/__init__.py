@@ -1,0 +1,1 @@
+"""Equations of motion: rigid body (attitude); later Clohessy-Wiltshire (relative orbit)."""

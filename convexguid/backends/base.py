@@ -1,0 +1,112 @@
+"""The conic program handed to backends, and what they hand back."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass(frozen=True)
+class Cones:
+    """Row counts of the cone blocks of ``A x + s = b``, in this order.
+
+    Attributes
+    ----------
+    zero
+        Equality rows (``A x = b``).
+    nonneg
+        Inequality rows (``A x <= b``).
+    soc
+        Sizes of the second-order cones ``||(b - A x)[1:]|| <= (b - A x)[0]``.
+    """
+
+    zero: int = 0
+    nonneg: int = 0
+    soc: tuple[int, ...] = ()
+
+    @property
+    def rows(self) -> int:
+        return self.zero + self.nonneg + sum(self.soc)
+
+
+@dataclass
+class ConicProgram:
+    """``min 1/2 x'Px + q'x  s.t.  A x + s = b, s in cones``.
+
+    ``P`` holds the upper triangle only (CSC); ``A`` is CSC with one row per cone
+    entry. The sparsity patterns of ``P`` and ``A`` are fixed for the life of a
+    backend: :meth:`Backend.update` only replaces their ``data`` arrays.
+    """
+
+    P: sp.csc_matrix
+    q: np.ndarray
+    A: sp.csc_matrix
+    b: np.ndarray
+    cones: Cones
+
+    @property
+    def num_variables(self) -> int:
+        return self.q.size
+
+    def objective(self, x: np.ndarray) -> float:
+        """:math:`\\tfrac12 x^T P x + q^T x` with ``P`` stored as its upper triangle."""
+        px = self.P @ x + self.P.T @ x - self.P.diagonal() * x
+        return float(0.5 * x @ px + self.q @ x)
+
+
+@dataclass(frozen=True)
+class BackendResult:
+    """Outcome of one convex solve.
+
+    ``status`` is one of ``optimal``, ``optimal_inaccurate``, ``infeasible``,
+    ``unbounded``, ``failed``. Residuals are the backend's own primal and dual
+    residuals so that optimality can be checked rather than assumed.
+    """
+
+    status: str
+    x: np.ndarray | None
+    objective: float
+    iterations: int
+    solve_time_s: float
+    primal_residual: float
+    dual_residual: float
+
+    @property
+    def usable(self) -> bool:
+        return self.status in ("optimal", "optimal_inaccurate") and self.x is not None
+
+
+class Backend(ABC):
+    """A convex solver set up once for a fixed sparsity pattern."""
+
+    name: str = ""
+    supports_soc: bool = False
+
+    def __init__(self, program: ConicProgram, tolerance: float = 1e-8, max_iterations: int = 0) -> None:
+        self.tolerance = tolerance
+        self.max_iterations = max_iterations
+        self._pattern = (program.P.indptr.copy(), program.P.indices.copy(),
+                         program.A.indptr.copy(), program.A.indices.copy(), program.cones)
+        self._setup(program)
+
+    def update(self, program: ConicProgram) -> None:
+        """Replace the numbers of the program; the sparsity pattern must not change."""
+        P_ptr, P_idx, A_ptr, A_idx, cones = self._pattern
+        same = (program.cones == cones and np.array_equal(program.P.indptr, P_ptr)
+                and np.array_equal(program.A.indptr, A_ptr) and np.array_equal(program.P.indices, P_idx)
+                and np.array_equal(program.A.indices, A_idx))
+        if not same:
+            raise ValueError(f"backend {self.name}: update() needs the sparsity pattern of the first program")
+        self._update(program)
+
+    @abstractmethod
+    def _setup(self, program: ConicProgram) -> None: ...
+
+    @abstractmethod
+    def _update(self, program: ConicProgram) -> None: ...
+
+    @abstractmethod
+    def solve(self) -> BackendResult: ...

@@ -1,0 +1,222 @@
+"""Flat-output attitude planning (Cai, Zhu, Zeng 2018).
+
+The Euler angles :math:`\\zeta = (\\varphi, \\theta, \\psi)` of the 3-2-1 sequence are
+flat outputs of the rigid body: rates and torques follow from them and their time
+derivatives (eqs. 10-12), so the differential equations disappear and the decision
+variables are :math:`\\zeta` at the :math:`N+1` mapped CGL nodes (99 for :math:`N = 32`).
+
+.. math::
+
+    \\omega = E(\\zeta)\\dot\\zeta, \\qquad \\dot\\omega = E(\\zeta)\\ddot\\zeta + \\dot E(\\zeta,\\dot\\zeta)\\dot\\zeta,
+    \\qquad u = I\\dot\\omega + \\omega\\times I\\omega,
+
+    J = \\frac{t_f - t_0}{2} \\sum_k w^c_k g'(\\tau_k)\\, \\|u(\\lambda_k)\\|^2 \\quad \\text{(eq. 26)},
+
+subject to the boundary attitudes and rates (eq. 29), :math:`|u_i| \\le u_{max}` (eq. 30)
+and :math:`r_B^T C_{BI}(\\zeta) r_I \\le \\cos\\beta` for every keep-out cone (eq. 31).
+Path constraints are imposed at the nodes and at ``check_points_per_interval``
+interpolated points between them, where the cone is most at risk. The SCP engine
+linearizes :math:`u(\\zeta)` (Gauss-Newton on the energy) and the cone maps each iteration.
+
+References
+----------
+Cai W., Zhu Y., Zeng P., "Differentially flat method of attitude maneuver trajectory
+planning for space vehicles under multiple constraints", J. Dynamics and Control 16(1),
+2018, DOI 10.6052/1672-6553-2018-005, eqs. (1)-(5), (10)-(12), (26), (29)-(31).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.interpolate import CubicHermiteSpline
+
+from convexguid.dynamics.rigid_body import euler_torque
+from convexguid.rotations import euler321_rates_from_body, euler321_rates_matrix, euler321_to_dcm
+from convexguid.scp.derivatives import pointwise_jacobian
+from convexguid.scp.problem import (
+    ConstraintBlock,
+    Evaluation,
+    LinearConstraints,
+    OutputBlock,
+    OutputConstraints,
+    ProgramSize,
+)
+from convexguid.transcription import MappedChebyshev
+
+
+@dataclass(frozen=True)
+class KeepOutCone:
+    """Body axis ``body_axis`` must stay more than ``half_angle_rad`` from inertial ``inertial_dir`` (unit vectors)."""
+
+    name: str
+    body_axis: np.ndarray
+    inertial_dir: np.ndarray
+    half_angle_rad: float
+
+    def cos_angle(self, rpy: np.ndarray) -> np.ndarray:
+        """:math:`r_B^T C_{BI}(\\zeta) r_I` at each row of ``rpy`` (complex-safe)."""
+        return np.einsum("i,nij,j->n", self.body_axis, euler321_to_dcm(rpy), self.inertial_dir)
+
+
+def euler321_body_acceleration(z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
+    """Body angular acceleration from Euler angles and their derivatives, Cai et al. eq. (11).
+
+    Rows of ``z``, ``zd``, ``zdd`` are (roll, pitch, yaw) values, rates and accelerations.
+    """
+    p, t = z[:, 0], z[:, 1]
+    pd, td, yd = zd[:, 0], zd[:, 1], zd[:, 2]
+    pdd, tdd, ydd = zdd[:, 0], zdd[:, 1], zdd[:, 2]
+    sp, cp, st, ct = np.sin(p), np.cos(p), np.sin(t), np.cos(t)
+    return np.stack([
+        pdd - ydd * st - td * yd * ct,
+        tdd * cp - pd * td * sp + ydd * sp * ct + pd * yd * cp * ct - td * yd * sp * st,
+        -tdd * sp - pd * td * cp + ydd * cp * ct - pd * yd * sp * ct - td * yd * cp * st,
+    ], axis=1)
+
+
+def flat_torque(inertia: np.ndarray, z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
+    """Torque as a function of the flat outputs, eq. (12): :math:`u = \\Gamma_u(\\zeta, \\dot\\zeta, \\ddot\\zeta)`."""
+    omega = np.einsum("nij,nj->ni", euler321_rates_matrix(z), zd)
+    return euler_torque(inertia, omega, euler321_body_acceleration(z, zd, zdd))
+
+
+@dataclass(frozen=True)
+class FlatAttitudeProblem:
+    """Energy-optimal rest-to-rest (or rate-to-rate) slew in flat outputs, SI units throughout."""
+
+    name: str
+    inertia: np.ndarray
+    torque_max: float
+    t0: float
+    tf: float
+    rpy0: np.ndarray
+    rate0: np.ndarray
+    rpyf: np.ndarray
+    ratef: np.ndarray
+    cones: tuple[KeepOutCone, ...]
+    grid: MappedChebyshev
+    check_points_per_interval: int = 2
+
+    @property
+    def time_scale(self) -> float:
+        """:math:`d\\lambda/dt = 2/(t_f - t_0)` from eq. (17)."""
+        return 2.0 / (self.tf - self.t0)
+
+    @cached_property
+    def node_times(self) -> np.ndarray:
+        return self.grid.times(self.t0, self.tf)
+
+    @cached_property
+    def path_interpolation(self) -> np.ndarray:
+        """Rows: the nodes, then the check points between them (where path constraints hold)."""
+        n1 = self.grid.n + 1
+        checks = self.grid.interpolation_matrix(self.grid.check_points(self.check_points_per_interval))
+        return np.vstack([np.eye(n1), checks]) if checks.size else np.eye(n1)
+
+    def flat_derivatives(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Node values of :math:`\\zeta, \\dot\\zeta, \\ddot\\zeta` from the design vector (eq. 23)."""
+        z = x.reshape(-1, 3)
+        s = self.time_scale
+        return z, s * (self.grid.d1 @ z), s * s * (self.grid.d2 @ z)
+
+    def torques(self, x: np.ndarray) -> np.ndarray:
+        return flat_torque(self.inertia, *self.flat_derivatives(x))
+
+    def body_rates(self, x: np.ndarray) -> np.ndarray:
+        z, zd, _ = self.flat_derivatives(x)
+        return np.einsum("nij,nj->ni", euler321_rates_matrix(z), zd)
+
+
+class FlatAttitudeProgram:
+    """:class:`convexguid.scp.problem.NonconvexProgram` view of a :class:`FlatAttitudeProblem`."""
+
+    def __init__(self, problem: FlatAttitudeProblem) -> None:
+        self.problem = problem
+        self.num_nodes = problem.grid.n + 1
+        self.num_variables = 3 * self.num_nodes
+
+    def size(self) -> ProgramSize:
+        """The NLP of the paper: 3(N+1) angles, 12 boundary equalities, torque and cone inequalities."""
+        n_path = self.problem.path_interpolation.shape[0]
+        return ProgramSize(self.num_variables, self.linear_constraints().A.shape[0],
+                           n_path * (6 + len(self.problem.cones)))
+
+    def initial_guess(self) -> np.ndarray:
+        """Cubic Hermite spline through the boundary attitudes and Euler rates (the paper's guess)."""
+        p = self.problem
+        rates = [euler321_rates_from_body(p.rpy0, p.rate0), euler321_rates_from_body(p.rpyf, p.ratef)]
+        spline = CubicHermiteSpline([p.t0, p.tf], np.vstack([p.rpy0, p.rpyf]), np.vstack(rates))
+        return spline(p.node_times).ravel()
+
+    def variable_scale(self) -> np.ndarray:
+        return np.ones(self.num_variables)
+
+    def residual_weights(self) -> np.ndarray:
+        """Clenshaw-Curtis weights of eq. (26), one per torque component."""
+        p = self.problem
+        return np.repeat(0.5 * (p.tf - p.t0) * p.grid.quadrature_weights, 3)
+
+    def linear_cost(self) -> np.ndarray:
+        return np.zeros(self.num_variables)
+
+    @cached_property
+    def _linear(self) -> LinearConstraints:
+        """Boundary conditions, eq. (29): attitudes fixed; :math:`\\dot\\zeta = E^{-1}\\omega` at both ends."""
+        p, n1 = self.problem, self.num_nodes
+        rows, rhs = [], []
+        for node, rpy, rate in ((0, p.rpy0, p.rate0), (n1 - 1, p.rpyf, p.ratef)):
+            pick = np.zeros(n1)
+            pick[node] = 1.0
+            rows.append(np.kron(pick, np.eye(3)))
+            rhs.append(rpy)
+            rows.append(np.kron(p.time_scale * p.grid.d1[node], np.eye(3)))
+            rhs.append(euler321_rates_from_body(rpy, rate))
+        n = self.num_variables
+        return LinearConstraints(np.vstack(rows), np.concatenate(rhs), np.zeros((0, n)), np.zeros(0))
+
+    def linear_constraints(self) -> LinearConstraints:
+        return self._linear
+
+    def output_constraints(self) -> OutputConstraints:
+        """Torque box, eq. (30), at the nodes and check points: :math:`|L u|_i \\le u_{max}`, linear in the torques."""
+        p = self.problem
+        interp = sp.kron(sp.csr_matrix(p.path_interpolation), sp.eye(3), format="csr")
+        rows = interp.shape[0]
+        M = sp.vstack([interp, -interp], format="csr")
+        return OutputConstraints(M, np.full(2 * rows, p.torque_max),
+                                 (OutputBlock("torque_Nm", slice(0, 2 * rows), "N m"),))
+
+    def _torque_jacobian(self, z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
+        """:math:`\\partial u_k/\\partial\\zeta_j = A_k\\delta_{kj} + s B_k D_{kj} + s^2 C_k D^{(2)}_{kj}` (complex step)."""
+        p, s = self.problem, self.problem.time_scale
+
+        def torque(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+            return flat_torque(p.inertia, a, b, c)
+
+        local = [pointwise_jacobian(torque, (z, zd, zdd), i) for i in range(3)]
+        jac = np.einsum("kab,kj->kajb", local[1], s * p.grid.d1)
+        jac += np.einsum("kab,kj->kajb", local[2], s * s * p.grid.d2)
+        idx = np.arange(self.num_nodes)
+        jac[idx, :, idx, :] += local[0]
+        return jac.reshape(self.num_variables, self.num_variables)
+
+    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
+        p = self.problem
+        z, zd, zdd = p.flat_derivatives(x)
+        u = flat_torque(p.inertia, z, zd, zdd)
+        path = p.path_interpolation
+        jac_u = self._torque_jacobian(z, zd, zdd) if jacobians else None
+        blocks = []
+        z_path = path @ z
+        for cone in p.cones:
+            values = cone.cos_angle(z_path) - np.cos(cone.half_angle_rad)
+            jac = None
+            if jacobians:
+                local = pointwise_jacobian(cone.cos_angle, (z_path,), 0)
+                jac = (local[:, None, :] * path[:, :, None]).reshape(path.shape[0], -1)
+            blocks.append(ConstraintBlock(f"keep_out_{cone.name}", values, jac, "cos"))
+        return Evaluation(u.ravel(), jac_u, tuple(blocks))

@@ -1,0 +1,197 @@
+"""The sequential convex programming loop shared by every problem family.
+
+Each iteration reads as a recipe: evaluate the nonlinear maps and their Jacobians
+at the iterate (convexify), assemble the trust-region subproblem with penalized
+slacks (:mod:`convexguid.scp.assembly`), solve it with the chosen backend, and
+accept or reject the step from the ratio of actual to predicted decrease of the
+exact-penalty merit function
+
+.. math::
+
+    \\phi(x) = f(x) + \\rho \\Big( \\sum \\max(0, g(x)) + \\sum |e(x)| \\Big).
+
+The objective's residuals are linearized (Gauss-Newton), so the subproblem is a
+convex QP whose fixed point is a KKT point of the nonlinear program. The trust
+radius shrinks on poor agreement and grows when the model is trusted and the step
+reaches the radius (the classical rule, e.g. Nocedal & Wright, Alg. 4.1).
+
+Stops with ``converged`` when the scaled step or the predicted decrease falls
+below the tolerance at a feasible iterate; ``infeasible`` when the iterates stall
+with constraints still violated (or the hard linear constraints are inconsistent);
+``max_iterations``; or ``solver_error`` when the backend fails outright.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from convexguid.backends import make_backend
+from convexguid.scp.assembly import SubproblemAssembler
+from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
+
+
+@dataclass(frozen=True)
+class IterationRecord:
+    """One row of the iteration table."""
+
+    iteration: int
+    objective: float
+    violation: float
+    step: float
+    trust_radius: float
+    ratio: float
+    accepted: bool
+    solver_status: str
+    solver_iterations: int
+    time_s: float
+
+
+@dataclass
+class SCPResult:
+    """Outcome of :func:`solve_scp`."""
+
+    x: np.ndarray
+    status: str
+    objective: float
+    max_violation: float
+    violations: dict[str, float]
+    iterations: int
+    history: list[IterationRecord] = field(default_factory=list)
+    message: str = ""
+    wall_time_s: float = 0.0
+    convexify_time_s: float = 0.0
+    solver_time_s: float = 0.0
+
+    @property
+    def overhead_time_s(self) -> float:
+        return max(0.0, self.wall_time_s - self.convexify_time_s - self.solver_time_s)
+
+
+def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
+    """:math:`f(x) = \\sum_i w_i r_i^2 + c^T x`."""
+    return float(weights @ ev.residuals**2 + cost @ x)
+
+
+def violation_by_block(ev: Evaluation) -> dict[str, float]:
+    """Worst violation of each nonlinear constraint block, in its own unit."""
+    out = {b.name: float(np.max(b.values, initial=0.0)) for b in ev.inequalities}
+    out.update({b.name: float(np.max(np.abs(b.values), initial=0.0)) for b in ev.equalities})
+    return {k: max(v, 0.0) for k, v in out.items()}
+
+
+def _penalty_sum(ev: Evaluation) -> float:
+    total = sum(float(np.maximum(b.values, 0.0).sum()) for b in ev.inequalities)
+    return total + sum(float(np.abs(b.values).sum()) for b in ev.equalities)
+
+
+def _project_on_equalities(program: NonconvexProgram, x: np.ndarray) -> np.ndarray:
+    """Least-change correction making ``x`` satisfy the hard linear equalities."""
+    lin = program.linear_constraints()
+    if lin.A.shape[0] == 0:
+        return x
+    correction, *_ = np.linalg.lstsq(lin.A, lin.b - lin.A @ x, rcond=None)
+    return x + correction
+
+
+def solve_scp(program: NonconvexProgram, settings: SCPSettings,
+              log: Callable[[IterationRecord], None] | None = None,
+              x0: np.ndarray | None = None) -> SCPResult:
+    """Run the SCP loop on ``program`` from ``x0`` (default: its initial guess)."""
+    start = time.perf_counter()
+    weights, cost = program.residual_weights(), program.linear_cost()
+    x = _project_on_equalities(program, program.initial_guess() if x0 is None else np.asarray(x0, float))
+    convexify = solver_time = 0.0
+
+    outputs = program.output_constraints()
+
+    def evaluate(point: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
+        """The program's own evaluation, and one that also lists the output constraints' values."""
+        raw = program.evaluate(point, jacobians)
+        return raw, replace(raw, inequalities=outputs.blocks_at(raw.residuals) + raw.inequalities)
+
+    def merit_at(point: np.ndarray, ev: Evaluation) -> float:
+        return objective_value(ev, weights, cost, point) + rho * _penalty_sum(ev)
+
+    t = time.perf_counter()
+    raw, ev = evaluate(x, jacobians=True)
+    convexify += time.perf_counter() - t
+    assembler = SubproblemAssembler(program.num_variables, raw.residuals.size, program.linear_constraints(),
+                                    outputs, sum(b.values.size for b in raw.inequalities),
+                                    sum(b.values.size for b in raw.equalities),
+                                    program.variable_scale(), cost, weights)
+    radius, rho = settings.trust_region, settings.penalty
+    merit = merit_at(x, ev)
+    backend = None
+    history: list[IterationRecord] = []
+    status, message = "max_iterations", f"no convergence in {settings.max_iterations} iterations"
+
+    for it in range(1, settings.max_iterations + 1):
+        program_k = assembler.build(x, raw, radius, rho)
+        if backend is None:
+            backend = make_backend(settings.backend, program_k, settings.backend_tolerance)
+        else:
+            backend.update(program_k)
+        res = backend.solve()
+        solver_time += res.solve_time_s
+        if not res.usable:
+            if res.status == "infeasible":
+                status, message = "infeasible", "the hard linear constraints (boundary conditions) are inconsistent"
+            else:
+                status, message = "solver_error", f"backend {settings.backend} returned {res.status}"
+            break
+        d = assembler.step(res.x)
+        predicted = merit - (program_k.objective(res.x) + cost @ x)
+        t = time.perf_counter()
+        x_new = x + d
+        _, ev_new = evaluate(x_new, jacobians=False)
+        merit_new = merit_at(x_new, ev_new)
+        convexify += time.perf_counter() - t
+        actual = merit - merit_new
+        ratio = actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
+        step = float(np.max(np.abs(d) / program.variable_scale()))
+        accepted = ratio >= settings.accept_ratio
+        if accepted:
+            t = time.perf_counter()
+            x, merit = x_new, merit_new
+            raw, ev = evaluate(x, jacobians=True)
+            convexify += time.perf_counter() - t
+        at_boundary = step >= 0.99 * radius
+        if ratio < settings.shrink_ratio:
+            radius = max(0.25 * step, settings.trust_region_min) if step > 0 else radius * 0.25
+        elif ratio > settings.expand_ratio and at_boundary:
+            radius = min(2.0 * radius, settings.trust_region_max)
+        record = IterationRecord(it, objective_value(ev, weights, cost, x), _max_violation(ev), step, radius,
+                                 ratio, accepted, res.status, res.iterations, time.perf_counter() - start)
+        history.append(record)
+        if log is not None:
+            log(record)
+        small_step = step <= settings.tolerance
+        small_decrease = 0 <= predicted <= settings.tolerance * max(1.0, abs(merit))
+        if small_step or small_decrease or radius <= settings.trust_region_min:
+            feasible = _max_violation(ev) <= settings.feasibility_tolerance
+            if feasible:
+                status, message = "converged", "step and predicted decrease below tolerance"
+            else:
+                status = "infeasible"
+                message = "iterates stalled with constraints violated: " + _describe_violations(ev)
+            break
+
+    return SCPResult(x=x, status=status, objective=objective_value(ev, weights, cost, x),
+                     max_violation=_max_violation(ev), violations=violation_by_block(ev),
+                     iterations=len(history), history=history, message=message,
+                     wall_time_s=time.perf_counter() - start, convexify_time_s=convexify,
+                     solver_time_s=solver_time)
+
+
+def _max_violation(ev: Evaluation) -> float:
+    return max(violation_by_block(ev).values(), default=0.0)
+
+
+def _describe_violations(ev: Evaluation) -> str:
+    units = {b.name: b.unit for b in (*ev.inequalities, *ev.equalities)}
+    parts = [f"{k} by {v:.3g} {units[k]}".rstrip() for k, v in violation_by_block(ev).items() if v > 0]
+    return "; ".join(parts) or "none"

@@ -1,0 +1,145 @@
+"""What a formulation hands to the SCP engine.
+
+The engine solves
+
+.. math::
+
+    \\min_x\\; \\sum_i w_i\\, r_i(x)^2 + c^T x
+    \\quad\\text{s.t.}\\quad A x = b,\\; G x \\le h,\\; g(x) \\le 0,\\; e(x) = 0,
+
+where :math:`r` (least-squares residuals, e.g. torques), :math:`g` and :math:`e` are
+nonlinear and are linearized about the current iterate each iteration, while
+:math:`A, b, G, h, c` are constant. Bounds that are linear in the residuals
+(:class:`OutputConstraints`, e.g. :math:`|u_i| \\le u_{max}` at nodes and interpolated
+points) stay sparse: the engine lifts :math:`y = r(x)` into the subproblem and bounds
+:math:`y`, instead of copying the dense Jacobian of :math:`r` into every bound row.
+A formulation implements :class:`NonconvexProgram`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass(frozen=True)
+class ConstraintBlock:
+    """A named group of nonlinear constraints and their Jacobian at the current iterate.
+
+    ``values <= 0`` for inequalities, ``values == 0`` for equalities; ``unit`` is the
+    unit in which ``values`` is measured (used in diagnostics).
+    """
+
+    name: str
+    values: np.ndarray
+    jacobian: np.ndarray | None = None
+    unit: str = ""
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Nonlinear maps of a :class:`NonconvexProgram` at one point (Jacobians optional)."""
+
+    residuals: np.ndarray
+    residual_jacobian: np.ndarray | None = None
+    inequalities: tuple[ConstraintBlock, ...] = ()
+    equalities: tuple[ConstraintBlock, ...] = ()
+
+
+@dataclass(frozen=True)
+class LinearConstraints:
+    """Constant constraints ``A x = b`` and ``G x <= h`` (kept hard in every subproblem)."""
+
+    A: np.ndarray
+    b: np.ndarray
+    G: np.ndarray
+    h: np.ndarray
+
+    @classmethod
+    def none(cls, n: int) -> LinearConstraints:
+        return cls(np.zeros((0, n)), np.zeros(0), np.zeros((0, n)), np.zeros(0))
+
+
+@dataclass(frozen=True)
+class OutputBlock:
+    """Rows ``rows`` of :class:`OutputConstraints` form the named constraint ``name`` (unit ``unit``)."""
+
+    name: str
+    rows: slice
+    unit: str = ""
+
+
+@dataclass(frozen=True)
+class OutputConstraints:
+    """Constant constraints ``M r(x) <= m`` on the residuals (sparse ``M``), softened by penalized slacks."""
+
+    M: sp.csr_matrix
+    m: np.ndarray
+    blocks: tuple[OutputBlock, ...]
+
+    @classmethod
+    def none(cls, num_residuals: int) -> OutputConstraints:
+        return cls(sp.csr_matrix((0, num_residuals)), np.zeros(0), ())
+
+    def blocks_at(self, residuals: np.ndarray) -> tuple[ConstraintBlock, ...]:
+        """The constraint values ``M r - m`` split into named blocks (no Jacobians: they are linear in r)."""
+        values = self.M @ residuals - self.m
+        return tuple(ConstraintBlock(b.name, values[b.rows], None, b.unit) for b in self.blocks)
+
+
+@dataclass(frozen=True)
+class ProgramSize:
+    """Dimensions of the nonlinear program (what a paper's table counts)."""
+
+    num_variables: int
+    num_equality_constraints: int
+    num_inequality_constraints: int
+
+
+class NonconvexProgram(Protocol):
+    """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`."""
+
+    num_variables: int
+
+    def initial_guess(self) -> np.ndarray: ...
+
+    def variable_scale(self) -> np.ndarray:
+        """Typical magnitude of each variable; the trust region is a box in scaled units."""
+        ...
+
+    def residual_weights(self) -> np.ndarray: ...
+
+    def linear_cost(self) -> np.ndarray: ...
+
+    def linear_constraints(self) -> LinearConstraints: ...
+
+    def output_constraints(self) -> OutputConstraints: ...
+
+    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation: ...
+
+
+@dataclass
+class SCPSettings:
+    """Settings of the SCP loop (see :func:`convexguid.scp.engine.solve_scp`).
+
+    ``tolerance`` bounds the scaled step and the relative predicted decrease at
+    convergence; ``feasibility_tolerance`` bounds the worst nonlinear-constraint
+    violation (in each block's own unit).
+    """
+
+    backend: str = "clarabel"
+    max_iterations: int = 50
+    tolerance: float = 1e-6
+    feasibility_tolerance: float = 1e-7
+    trust_region: float = 0.5
+    trust_region_min: float = 1e-9
+    trust_region_max: float = 1e3
+    penalty: float = 1e4
+    accept_ratio: float = 1e-4
+    shrink_ratio: float = 0.25
+    expand_ratio: float = 0.75
+    backend_tolerance: float = 1e-9
+    extra: dict = field(default_factory=dict)

@@ -1,0 +1,355 @@
+"""Building blocks shared by every problem family.
+
+Every model is a frozen pydantic model that rejects unknown keys and does no
+type coercion (a string where a number is expected is an error; integers are
+accepted for floats). YAML keys carry their unit (``tf_s``, ``half_angle_deg``);
+read-only properties give the SI values (``half_angle_rad``, ``inertia_matrix``).
+
+Validators report problems with :func:`spec_error`, which carries what is wrong,
+what would be valid, and optionally a key path below the failing location and the
+offending value; :mod:`convexguid.spec.loader` turns these into one-line
+:class:`~convexguid.errors.SpecError` messages.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PlainValidator,
+    PrivateAttr,
+    field_validator,
+)
+from pydantic_core import PydanticCustomError
+
+from convexguid.backends import check_backend_name
+from convexguid.errors import BackendError
+
+SPEC_CONFIG = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+"""Model configuration of every spec model (unknown keys, coercion and inf/nan are errors)."""
+
+SPEC_ERROR_TYPE = "convexguid_spec"
+"""pydantic error type raised by :func:`spec_error`."""
+
+_NO_VALUE = object()
+
+
+def spec_error(problem: str, hint: str, *, key: Sequence[str | int] = (), value: Any = _NO_VALUE
+               ) -> PydanticCustomError:
+    """Build a validation error that the loader renders as ``path: problem (got value); hint``.
+
+    Parameters
+    ----------
+    problem : str
+        What is wrong. The token ``{here}`` is replaced by the dotted path of the model that
+        raised the error followed by a dot (empty at the top level), so cross-field checks can
+        name sibling keys: ``"must be greater than {here}t0_s = 0.0"``.
+    hint : str
+        What would be valid.
+    key : sequence of str or int, optional
+        Key path, below the location pydantic reports, of the offending entry.
+    value : object, optional
+        The offending value; by default the input pydantic reports.
+
+    Returns
+    -------
+    pydantic_core.PydanticCustomError
+        To be raised from a validator.
+    """
+    ctx: dict[str, Any] = {"problem": problem, "hint": hint, "key": tuple(key)}
+    if value is not _NO_VALUE:
+        ctx["value"] = value
+    return PydanticCustomError(SPEC_ERROR_TYPE, "{problem}; {hint}", ctx)
+
+
+def readonly(array: np.ndarray) -> np.ndarray:
+    """Return ``array`` marked read-only."""
+    array.setflags(write=False)
+    return array
+
+
+def _is_number(x: object) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def _numbers(v: object, length: int, hint: str, key: tuple[int, ...] = ()) -> tuple[float, ...]:
+    """Check that ``v`` (at ``key`` below the validated field) is a list of ``length`` finite numbers."""
+    if not isinstance(v, (list, tuple)):
+        raise spec_error(f"expected a list of {length} numbers", hint, key=key, value=v)
+    if len(v) != length:
+        raise spec_error(f"has {len(v)} entries instead of {length}", hint, key=key, value=v)
+    for i, x in enumerate(v):
+        if not _is_number(x):
+            raise spec_error("not a number", hint, key=(*key, i), value=x)
+        if not math.isfinite(x):
+            raise spec_error("not a finite number", hint, key=(*key, i), value=x)
+    return tuple(float(x) for x in v)
+
+
+def _vector3(v: object) -> tuple[float, float, float]:
+    return _numbers(v, 3, "give a list of 3 finite numbers")  # type: ignore[return-value]
+
+
+def _direction3(v: object) -> tuple[float, float, float]:
+    hint = "give a nonzero 3-vector"
+    vec = _numbers(v, 3, hint)
+    if math.sqrt(sum(x * x for x in vec)) <= 1e-12:
+        raise spec_error("zero-length direction vector", hint)
+    return vec  # type: ignore[return-value]
+
+
+Vector3 = Annotated[tuple[float, float, float], PlainValidator(_vector3)]
+"""Three finite numbers (a YAML list), stored as a tuple of floats."""
+
+Direction3 = Annotated[tuple[float, float, float], PlainValidator(_direction3)]
+"""A :data:`Vector3` of norm greater than 1e-12 (not normalised; see the ``*_unit`` properties)."""
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegativeFloat = Annotated[float, Field(ge=0)]
+NonEmptyStr = Annotated[str, Field(min_length=1)]
+
+
+def _inertia(v: object) -> tuple[tuple[float, float, float], ...]:
+    """Validate 3 principal moments or a symmetric positive definite 3x3 matrix (kg m^2)."""
+    hint = "give 3 positive principal moments or a symmetric positive definite 3x3 matrix"
+    if isinstance(v, (list, tuple)) and v and all(isinstance(row, (list, tuple)) for row in v):
+        if len(v) != 3:
+            raise spec_error(f"matrix has {len(v)} rows", hint)
+        rows = [_numbers(row, 3, hint, key=(i,)) for i, row in enumerate(v)]
+        matrix = np.array(rows)
+        scale = float(np.max(np.abs(matrix)))
+        if float(np.max(np.abs(matrix - matrix.T))) > 1e-9 * scale:
+            raise spec_error("inertia matrix is not symmetric", hint)
+        matrix = 0.5 * (matrix + matrix.T)
+    else:
+        moments = _numbers(v, 3, hint)
+        for i, moment in enumerate(moments):
+            if moment <= 0.0:
+                raise spec_error("principal moment of inertia must be positive", hint, key=(i,),
+                                 value=v[i])  # type: ignore[index]
+        matrix = np.diag(moments)
+    if float(np.linalg.eigvalsh(matrix)[0]) <= 0.0:
+        raise spec_error("inertia matrix is not positive definite", hint)
+    return tuple(tuple(float(x) for x in row) for row in matrix)
+
+
+InertiaMatrix = Annotated[tuple[tuple[float, float, float], ...], PlainValidator(_inertia)]
+"""Inertia in kg m^2: 3 principal moments or a 3x3 matrix in YAML, stored as a 3x3 tuple."""
+
+
+class SpecModel(BaseModel):
+    """Base of every spec model: frozen, strict, unknown keys rejected."""
+
+    model_config = SPEC_CONFIG
+
+
+class Spacecraft(SpecModel):
+    """Rigid-body spacecraft with a symmetric torque bound on each body axis.
+
+    Attributes
+    ----------
+    inertia_kgm2 : tuple of tuple of float
+        Inertia matrix about the centre of mass in body axes, kg m^2 (3x3, symmetric positive definite).
+    torque_max_Nm : float
+        Bound on each body-axis control torque, N m.
+    """
+
+    inertia_kgm2: InertiaMatrix
+    torque_max_Nm: PositiveFloat
+
+    @property
+    def inertia_matrix(self) -> np.ndarray:
+        """Inertia matrix, kg m^2 (3x3, read-only)."""
+        return readonly(np.array(self.inertia_kgm2))
+
+
+class KeepOutCone(SpecModel):
+    """Keep-out cone: the body axis must stay more than ``half_angle_deg`` away from an inertial direction.
+
+    Attributes
+    ----------
+    name : str
+        Unique name of the cone (used in constraint names, e.g. ``keep_out_sun_deg``).
+    body_axis : tuple of float
+        Sensitive body axis (body frame), any nonzero length.
+    inertial_dir : tuple of float
+        Direction to avoid (inertial frame), any nonzero length.
+    half_angle_deg : float
+        Cone half-angle, deg, in (0, 180).
+    """
+
+    name: NonEmptyStr
+    body_axis: Direction3
+    inertial_dir: Direction3
+    half_angle_deg: Annotated[float, Field(gt=0, lt=180)]
+
+    @property
+    def body_axis_unit(self) -> np.ndarray:
+        """Unit body axis (read-only)."""
+        axis = np.array(self.body_axis)
+        return readonly(axis / np.linalg.norm(axis))
+
+    @property
+    def inertial_dir_unit(self) -> np.ndarray:
+        """Unit inertial direction (read-only)."""
+        direction = np.array(self.inertial_dir)
+        return readonly(direction / np.linalg.norm(direction))
+
+    @property
+    def half_angle_rad(self) -> float:
+        """Cone half-angle, rad."""
+        return math.radians(self.half_angle_deg)
+
+
+def _cone_list(v: object) -> tuple[object, ...]:
+    if not isinstance(v, (list, tuple)):
+        raise spec_error("expected a list of keep-out cones", "give a YAML list (possibly empty) of mappings")
+    return tuple(v)
+
+
+def _unique_cone_names(cones: tuple[KeepOutCone, ...]) -> tuple[KeepOutCone, ...]:
+    seen: set[str] = set()
+    for i, cone in enumerate(cones):
+        if cone.name in seen:
+            raise spec_error("duplicate keep-out cone name", "give every cone a unique name",
+                             key=(i, "name"), value=cone.name)
+        seen.add(cone.name)
+    return cones
+
+
+KeepOutList = Annotated[
+    tuple[KeepOutCone, ...], BeforeValidator(_cone_list), AfterValidator(_unique_cone_names)
+]
+"""A YAML list of :class:`KeepOutCone` with unique names, stored as a tuple."""
+
+
+class SolverSettings(SpecModel):
+    """Settings of the sequential convex programming loop and its convex backend.
+
+    Attributes
+    ----------
+    backend : str
+        Convex solver name (see :mod:`convexguid.backends`).
+    max_iterations : int
+        Maximum number of SCP iterations.
+    tolerance : float
+        Stopping tolerance of the SCP loop.
+    trust_region : float
+        Initial trust-region radius.
+    penalty : float
+        Weight of the exact penalty on constraint violations.
+    verbose : bool
+        Print the iteration table.
+    """
+
+    backend: str = "clarabel"
+    max_iterations: Annotated[int, Field(ge=1)] = 50
+    tolerance: PositiveFloat = 1e-6
+    trust_region: PositiveFloat = 0.5
+    penalty: PositiveFloat = 1e4
+    verbose: bool = True
+
+    @field_validator("backend")
+    @classmethod
+    def _known_backend(cls, name: str) -> str:
+        try:
+            check_backend_name(name)
+        except BackendError as exc:
+            _, _, installed = str(exc).partition("; ")
+            raise spec_error("unknown backend", installed or str(exc)) from None
+        return name
+
+
+class VerificationSettings(SpecModel):
+    """Settings of the dense re-propagation that checks a planned trajectory.
+
+    Attributes
+    ----------
+    grid_points : int
+        Number of points of the dense time grid.
+    rtol, atol : float
+        Relative and absolute tolerances of the scipy integrator.
+    final_attitude_tol_rad : float
+        Allowed final attitude error, rad.
+    final_rate_tol_radps : float
+        Allowed final angular-rate error, rad/s.
+    constraint_tol : float
+        Relative slack allowed on path constraints.
+    """
+
+    grid_points: Annotated[int, Field(ge=100)] = 2001
+    rtol: PositiveFloat = 1e-10
+    atol: PositiveFloat = 1e-12
+    final_attitude_tol_rad: PositiveFloat = 1e-3
+    final_rate_tol_radps: PositiveFloat = 1e-4
+    constraint_tol: NonNegativeFloat = 1e-6
+
+
+class Reference(SpecModel):
+    """Published values a problem reproduces, and the tolerances the validation applies.
+
+    Attributes
+    ----------
+    citation : str
+        Full citation of the paper.
+    table : str
+        Table or figure the values come from.
+    values : dict of str to float
+        Published values by quantity name (keys of the summary JSON, e.g. ``objective``).
+    rel_tol : float
+        Default relative tolerance.
+    tolerances : dict of str to float or None
+        Per-quantity relative tolerances overriding ``rel_tol``.
+    max_values : dict of str to float or None
+        Quantities that must not exceed the given number (e.g. ``iterations``).
+    notes : str or None
+        Free text.
+    """
+
+    citation: NonEmptyStr
+    table: NonEmptyStr
+    values: dict[str, float]
+    rel_tol: PositiveFloat = 1e-3
+    tolerances: dict[str, NonNegativeFloat] | None = None
+    max_values: dict[str, float] | None = None
+    notes: str | None = None
+
+    def tolerance_for(self, quantity: str) -> float:
+        """Relative tolerance applied to ``quantity``."""
+        return (self.tolerances or {}).get(quantity, self.rel_tol)
+
+
+class ProblemBase(SpecModel):
+    """Keys common to every problem file; each family subclasses it.
+
+    Attributes
+    ----------
+    name : str
+        Problem name (used in reports and the summary JSON).
+    family : str
+        Problem family; selects the model class (see ``FAMILY_MODELS``).
+    method : str
+        Solution method.
+    description, notes : str or None
+        Free text (``notes`` says e.g. which parameters the paper does not give).
+    """
+
+    name: NonEmptyStr
+    family: str
+    method: Literal["scp"] = "scp"
+    description: str | None = None
+    notes: str | None = None
+    _source: str = PrivateAttr(default="<dict>")
+
+    @property
+    def source(self) -> str:
+        """File the problem was read from, ``"<dict>"`` when built from Python."""
+        return self._source

@@ -1,0 +1,132 @@
+"""Problem family ``flat_attitude``: rest-to-rest attitude slew with differential flatness.
+
+The attitude is parametrised by 3-2-1 (yaw-pitch-roll, Z-Y-X) Euler angles, the flat
+outputs of the rigid body; the torque follows from the flat map, which is singular at
+pitch = +-90 deg. The trajectory is discretised on mapped Chebyshev-Gauss-Lobatto nodes.
+
+References
+----------
+Cai, Zhu, Zeng (2018), J. Dynamics and Control, DOI 10.6052/1672-6553-2018-005.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from convexguid.spec.common import (
+    KeepOutList,
+    ProblemBase,
+    Reference,
+    SolverSettings,
+    Spacecraft,
+    SpecModel,
+    Vector3,
+    VerificationSettings,
+    readonly,
+    spec_error,
+)
+
+PITCH_LIMIT_DEG = 89.9
+"""Largest accepted absolute pitch of a boundary attitude, deg."""
+
+
+class Attitude321(SpecModel):
+    """Attitude and body rates at a boundary.
+
+    Attributes
+    ----------
+    roll_pitch_yaw_deg : tuple of float
+        3-2-1 Euler angles (roll, pitch, yaw) of the body relative to the inertial frame, deg;
+        ``|pitch| < 89.9``.
+    rate_degps : tuple of float
+        Body angular rate in body axes, deg/s.
+    """
+
+    roll_pitch_yaw_deg: Vector3
+    rate_degps: Vector3 = (0.0, 0.0, 0.0)
+
+    @field_validator("roll_pitch_yaw_deg")
+    @classmethod
+    def _pitch_not_singular(cls, rpy: tuple[float, float, float]) -> tuple[float, float, float]:
+        if abs(rpy[1]) >= PITCH_LIMIT_DEG:
+            raise spec_error("the 3-2-1 flat map is singular at pitch = +-90 deg",
+                             f"give |pitch| < {PITCH_LIMIT_DEG} deg", key=(1,), value=rpy[1])
+        return rpy
+
+    @property
+    def rpy_rad(self) -> np.ndarray:
+        """Roll, pitch, yaw, rad (read-only)."""
+        return readonly(np.radians(self.roll_pitch_yaw_deg))
+
+    @property
+    def rate_radps(self) -> np.ndarray:
+        """Body angular rate, rad/s (read-only)."""
+        return readonly(np.radians(self.rate_degps))
+
+
+class AttitudeBoundary(SpecModel):
+    """Time interval and boundary attitudes.
+
+    Attributes
+    ----------
+    t0_s, tf_s : float
+        Initial and final time, s (``tf_s > t0_s``).
+    initial, final : Attitude321
+        Boundary attitudes and rates.
+    """
+
+    t0_s: float = 0.0
+    tf_s: float
+    initial: Attitude321
+    final: Attitude321
+
+    @model_validator(mode="after")
+    def _tf_after_t0(self) -> AttitudeBoundary:
+        if self.tf_s <= self.t0_s:
+            raise spec_error(f"must be greater than {{here}}t0_s = {self.t0_s!r}",
+                             "give a final time after the initial time", key=("tf_s",), value=self.tf_s)
+        return self
+
+    @property
+    def duration_s(self) -> float:
+        """Maneuver duration ``tf_s - t0_s``, s."""
+        return self.tf_s - self.t0_s
+
+
+class ChebyshevDiscretization(SpecModel):
+    """Mapped Chebyshev pseudospectral discretisation.
+
+    Attributes
+    ----------
+    method : str
+        ``mapped_chebyshev``.
+    nodes : int
+        Polynomial degree N (N + 1 Chebyshev-Gauss-Lobatto nodes), at least 4.
+    map_epsilon : float
+        Parameter of the node map, in (0, 1).
+    check_points_per_interval : int
+        Extra points per node interval where path constraints are also imposed.
+    """
+
+    method: Literal["mapped_chebyshev"] = "mapped_chebyshev"
+    nodes: Annotated[int, Field(ge=4)]
+    map_epsilon: Annotated[float, Field(gt=0, lt=1)] = 1e-6
+    check_points_per_interval: Annotated[int, Field(ge=0)] = 2
+
+
+class FlatAttitudeProblem(ProblemBase):
+    """A ``flat_attitude`` problem file (see ``problems/cai2018_flat_attitude.yaml``)."""
+
+    family: Literal["flat_attitude"]
+    spacecraft: Spacecraft
+    boundary: AttitudeBoundary
+    keep_out: KeepOutList = ()
+    objective: Literal["energy"] = "energy"
+    discretization: ChebyshevDiscretization
+    solver: SolverSettings = SolverSettings()
+    verification: VerificationSettings = VerificationSettings()
+    reference: Reference | None = None
+

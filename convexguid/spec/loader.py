@@ -1,0 +1,260 @@
+"""Read problem YAML files, apply ``--set`` overrides, validate by family.
+
+Every problem reaches the user as a :class:`~convexguid.errors.SpecError` with a
+one-line message ``<file>: <dotted.key.path>: <what is wrong> (got <value>); <what
+would be valid>``; pydantic's :class:`~pydantic.ValidationError` never escapes.
+"""
+
+from __future__ import annotations
+
+import copy
+import typing
+from collections.abc import Mapping, Sequence
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import BaseModel, ValidationError
+from pydantic_core import ErrorDetails
+
+from convexguid.errors import SpecError
+from convexguid.spec.common import SPEC_ERROR_TYPE, ProblemBase
+from convexguid.spec.flat_attitude import FlatAttitudeProblem
+
+ProblemSpec = ProblemBase
+"""Type of every validated problem (each family subclasses it)."""
+
+FAMILY_MODELS: dict[str, type[ProblemBase]] = {
+    "flat_attitude": FlatAttitudeProblem,
+}
+"""Model class of each problem family, by the value of the ``family`` key."""
+
+_PROBLEMS = {
+    "greater_than": "out of range", "greater_than_equal": "out of range", "less_than": "out of range",
+    "less_than_equal": "out of range", "finite_number": "not a finite number", "string_too_short": "empty",
+    "literal_error": "invalid value", "invalid_key": "key is not a string",
+}
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """Safe YAML loader that rejects duplicate keys instead of keeping the last one."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen: set[Any] = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if isinstance(key, typing.Hashable) and key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r}", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
+def _yaml_load(text: str) -> Any:
+    return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+
+
+def _one_line(text: str, limit: int = 100) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _dotted(loc: Sequence[str | int]) -> str:
+    return ".".join(str(part) for part in loc)
+
+
+def load_problem(path: str | PathLike[str], overrides: Sequence[str] = ()) -> ProblemSpec:
+    """Read, override and validate a problem YAML file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Problem file.
+    overrides : sequence of str
+        ``dotted.key.path=value`` strings applied in order (see :func:`apply_overrides`).
+
+    Returns
+    -------
+    ProblemSpec
+        The validated problem of the file's family; ``.source`` is ``str(path)``.
+
+    Raises
+    ------
+    SpecError
+        If the file cannot be read or parsed, an override does not apply, or validation fails.
+    """
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SpecError(f"{source}: file not found; give the path of an existing problem YAML file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise SpecError(f"{source}: cannot read file ({_one_line(reason)}); give a readable UTF-8 YAML file"
+                        ) from None
+    try:
+        data = _yaml_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+        what = _one_line(str(getattr(exc, "problem", None) or exc))
+        raise SpecError(f"{source}: {where}YAML syntax error: {what}; fix the YAML syntax") from None
+    if not isinstance(data, dict):
+        raise SpecError(f"{source}: top level is not a mapping (got {_one_line(repr(data))}); "
+                        "a problem file is a mapping of keys such as name, family, spacecraft")
+    return parse_problem(apply_overrides(data, overrides, source), source)
+
+
+def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: str) -> dict[str, Any]:
+    """Apply ``--set`` overrides to a copy of the raw problem data.
+
+    Parameters
+    ----------
+    data : mapping
+        Raw problem data (not modified).
+    overrides : sequence of str
+        ``dotted.key.path=value``; the value is parsed as YAML, list items are addressed by
+        integer index (``keep_out.0.half_angle_deg=30``). Every path component must exist,
+        except that a missing last key of a mapping is added (validation then judges it).
+    source : str
+        File name used in error messages.
+
+    Returns
+    -------
+    dict
+        Deep copy of ``data`` with the overrides applied.
+
+    Raises
+    ------
+    SpecError
+        If an override is malformed, its value is not YAML, or its path does not exist.
+    """
+    result = copy.deepcopy(dict(data))
+    for override in overrides:
+        key, sep, raw = override.partition("=")
+        parts = key.strip().split(".")
+        if not sep or not all(parts):
+            raise SpecError(f"{source}: malformed override (got {override!r}); "
+                            "write key.path=value, e.g. boundary.tf_s=25")
+        try:
+            value = _yaml_load(raw)
+        except yaml.YAMLError:
+            raise SpecError(f"{source}: {key}: override value is not valid YAML (got {raw!r}); "
+                            "give a YAML number, string, list or mapping") from None
+        node: Any = result
+        for depth, part in enumerate(parts):
+            last = depth == len(parts) - 1
+            here = _dotted(parts[: depth + 1])
+            if isinstance(node, dict):
+                if part not in node and not last:
+                    names = ", ".join(map(str, node)) or "none"
+                    parent = _dotted(parts[:depth]) or "the top level"
+                    raise SpecError(f"{source}: {here}: key does not exist (got override {override!r}); "
+                                    f"existing keys under {parent}: {names}")
+                if last:
+                    node[part] = value
+                else:
+                    node = node[part]
+            elif isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    valid = f"valid indices: 0 to {len(node) - 1}" if node else "the list is empty"
+                    raise SpecError(f"{source}: {here}: list index does not exist "
+                                    f"(got override {override!r}); {valid}")
+                if last:
+                    node[int(part)] = value
+                else:
+                    node = node[int(part)]
+            else:
+                raise SpecError(f"{source}: {here}: key does not exist (got override {override!r}); "
+                                f"{_dotted(parts[:depth])} is a {type(node).__name__}, not a mapping or list")
+    return result
+
+
+def parse_problem(data: Mapping[str, Any], source: str = "<dict>") -> ProblemSpec:
+    """Validate raw problem data with the model of its ``family``.
+
+    Parameters
+    ----------
+    data : mapping
+        Raw problem data, as read from YAML.
+    source : str
+        File name used in error messages and stored as ``.source``.
+
+    Returns
+    -------
+    ProblemSpec
+        Instance of ``FAMILY_MODELS[data["family"]]``.
+
+    Raises
+    ------
+    SpecError
+        One line naming the first problem (and how many more there are).
+    """
+    known = ", ".join(FAMILY_MODELS)
+    if not isinstance(data, Mapping):
+        raise SpecError(f"{source}: top level is not a mapping (got {_one_line(repr(data))}); "
+                        "give a mapping of keys such as name, family, spacecraft")
+    if "family" not in data:
+        raise SpecError(f"{source}: family: missing required key; known families: {known}")
+    family = data["family"]
+    model = FAMILY_MODELS.get(family) if isinstance(family, str) else None
+    if model is None:
+        raise SpecError(f"{source}: family: unknown family (got {_one_line(repr(family))}); "
+                        f"known families: {known}")
+    try:
+        spec = model.model_validate(dict(data))
+    except ValidationError as exc:
+        errors = exc.errors()
+        more = {1: "", 2: " (and 1 more problem)"}.get(len(errors), f" (and {len(errors) - 1} more problems)")
+        raise SpecError(f"{source}: {_describe(errors[0], model)}{more}") from None
+    spec._source = source
+    return spec
+
+
+def _describe(error: ErrorDetails, model: type[BaseModel]) -> str:
+    """Render one pydantic error as ``path: problem (got value); hint``."""
+    loc = tuple(error["loc"])
+    ctx = error.get("ctx") or {}
+    kind = error["type"]
+    value = error.get("input")
+    if kind == SPEC_ERROR_TYPE:
+        here = _dotted(loc)
+        problem = ctx["problem"].replace("{here}", here + "." if here else "")
+        path = _dotted(loc + tuple(ctx["key"]))
+        return f"{path}: {problem} (got {_one_line(repr(ctx.get('value', value)))}); {ctx['hint']}"
+    path = _dotted(loc) or "<top level>"
+    if kind == "missing":
+        return f"{path}: missing required key"
+    if kind == "extra_forbidden":
+        keys = _valid_keys(model, loc[:-1])
+        return f"{path}: unknown key (got {_one_line(repr(value))}); valid keys: {keys}"
+    if kind in ("model_type", "model_attributes_type", "dict_type"):
+        sub = _valid_keys(model, loc)
+        hint = f"give a mapping with keys: {sub}" if sub else "give a mapping"
+        return f"{path}: wrong type, expected a mapping (got {_one_line(repr(value))}); {hint}"
+    problem = _PROBLEMS.get(kind, "wrong type" if kind.endswith("_type") else "invalid value")
+    msg = error["msg"]
+    return f"{path}: {problem} (got {_one_line(repr(value))}); {msg[:1].lower()}{_one_line(msg[1:], 200)}"
+
+
+def _valid_keys(model: type[BaseModel], loc: Sequence[str | int]) -> str:
+    """Comma-separated keys of the model reached from ``model`` along ``loc`` ('' if none)."""
+    current: type[BaseModel] | None = model
+    for part in loc:
+        if isinstance(part, int):  # list item: the item model was already found
+            continue
+        field = current.model_fields.get(part) if current is not None else None
+        current = _find_model(field.annotation) if field is not None else None
+    return ", ".join(current.model_fields) if current is not None else ""
+
+
+def _find_model(annotation: Any) -> type[BaseModel] | None:
+    """First pydantic model class inside a type annotation (through lists, unions, Annotated)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _find_model(arg)
+        if found is not None:
+            return found
+    return None
