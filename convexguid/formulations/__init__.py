@@ -1,0 +1,10 @@
+"""Problem families: each turns a validated spec into a planned, verified :class:`~convexguid.solution.Solution`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from convexguid.formulations.flat_attitude import solve_flat_attitude
+
+FAMILY_SOLVERS: dict[str, Callable] = {"flat_attitude": solve_flat_attitude}
+"""Solve function of each family, by the spec's ``family`` value."""

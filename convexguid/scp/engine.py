@@ -16,8 +16,10 @@ radius shrinks on poor agreement and grows when the model is trusted and the ste
 reaches the radius (the classical rule, e.g. Nocedal & Wright, Alg. 4.1).
 
 Stops with ``converged`` when the scaled step or the predicted decrease falls
-below the tolerance at a feasible iterate; ``infeasible`` when the iterates stall
-with constraints still violated (or the hard linear constraints are inconsistent);
+below the tolerance at a feasible iterate. Stalling with constraints violated
+first multiplies the penalty weight by ten (an exact penalty needs a weight above
+the multipliers), up to ``penalty_max``; ``infeasible`` when the iterates still stall
+with constraints violated (or the hard linear constraints are inconsistent);
 ``max_iterations``; or ``solver_error`` when the backend fails outright.
 """
 
@@ -172,12 +174,18 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
         small_step = step <= settings.tolerance
         small_decrease = 0 <= predicted <= settings.tolerance * max(1.0, abs(merit))
         if small_step or small_decrease or radius <= settings.trust_region_min:
-            feasible = _max_violation(ev) <= settings.feasibility_tolerance
-            if feasible:
+            if _max_violation(ev) <= settings.feasibility_tolerance:
                 status, message = "converged", "step and predicted decrease below tolerance"
-            else:
-                status = "infeasible"
-                message = "iterates stalled with constraints violated: " + _describe_violations(ev)
+                break
+            if rho < settings.penalty_max:
+                # A stationary point of the penalty function that violates the constraints:
+                # the penalty is below the multipliers; raise it and go on.
+                rho = min(10.0 * rho, settings.penalty_max)
+                merit = merit_at(x, ev)
+                radius = max(radius, settings.trust_region)
+                continue
+            status = "infeasible"
+            message = "iterates stalled with constraints violated: " + _describe_violations(ev)
             break
 
     return SCPResult(x=x, status=status, objective=objective_value(ev, weights, cost, x),
@@ -195,3 +203,12 @@ def _describe_violations(ev: Evaluation) -> str:
     units = {b.name: b.unit for b in (*ev.inequalities, *ev.equalities)}
     parts = [f"{k} by {v:.3g} {units[k]}".rstrip() for k, v in violation_by_block(ev).items() if v > 0]
     return "; ".join(parts) or "none"
+
+
+def merge_results(first: SCPResult, second: SCPResult) -> SCPResult:
+    """``second`` continued from ``first`` (e.g. after adding constraint points): histories and times add up."""
+    history = first.history + [replace(r, iteration=r.iteration + first.iterations) for r in second.history]
+    return replace(second, history=history, iterations=len(history),
+                   wall_time_s=first.wall_time_s + second.wall_time_s,
+                   convexify_time_s=first.convexify_time_s + second.convexify_time_s,
+                   solver_time_s=first.solver_time_s + second.solver_time_s)

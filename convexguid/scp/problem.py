@@ -137,9 +137,10 @@ class SCPSettings:
     trust_region: float = 0.5
     trust_region_min: float = 1e-9
     trust_region_max: float = 1e3
-    penalty: float = 1e4
+    penalty: float = 1e3
+    penalty_max: float = 1e7
     accept_ratio: float = 1e-4
     shrink_ratio: float = 0.25
     expand_ratio: float = 0.75
-    backend_tolerance: float = 1e-9
+    backend_tolerance: float = 1e-8
     extra: dict = field(default_factory=dict)

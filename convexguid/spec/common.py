@@ -254,7 +254,7 @@ class SolverSettings(SpecModel):
     max_iterations: Annotated[int, Field(ge=1)] = 50
     tolerance: PositiveFloat = 1e-6
     trust_region: PositiveFloat = 0.5
-    penalty: PositiveFloat = 1e4
+    penalty: PositiveFloat = 1e3
     verbose: bool = True
 
     @field_validator("backend")
