@@ -96,7 +96,7 @@ class OsqpBackend(Backend):
 
     def solve(self) -> BackendResult:
         start = time.perf_counter()
-        res = self._solver.solve()
+        res = self._solver.solve(raise_error=False)
         elapsed = time.perf_counter() - start
         status = _OSQP_STATUS.get(str(res.info.status), "failed")
         x = np.asarray(res.x) if status.startswith("optimal") else None

@@ -1,0 +1,127 @@
+"""Command line: ``convexguid solve|validate|bench`` (the contract of design.md).
+
+Exit codes: 0 success; 1 the solve did not converge or its verification failed
+(the summary is still written); 2 bad input (one line, no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from convexguid.errors import ConvexGuidError
+from convexguid.scp.engine import IterationRecord
+from convexguid.solution import Solution
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="convexguid", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    solve = sub.add_parser("solve", help="plan one problem file, verify it, write results")
+    solve.add_argument("problem", type=Path)
+    solve.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+                       help="override one YAML value (value parsed as YAML); repeatable")
+    solve.add_argument("--out", type=Path, help="directory for CSV trajectories, summary JSON and plots")
+    solve.add_argument("--summary-json", type=Path, help="write the summary JSON here")
+    solve.add_argument("--quiet", action="store_true", help="no iteration table")
+    validate = sub.add_parser("validate", help="solve the paper cases and write the validation report")
+    validate.add_argument("problems", nargs="*", type=Path)
+    validate.add_argument("--report", type=Path, default=Path("validation/REPORT.md"))
+    bench = sub.add_parser("bench", help="time the SCP against IPOPT on the same transcription")
+    bench.add_argument("problem", nargs="?", type=Path, default=Path("problems/cai2018_flat_attitude.yaml"))
+    bench.add_argument("--nodes", type=int, nargs="+", default=[16, 32, 64, 128])
+    bench.add_argument("--repeat", type=int, default=3, help="timed runs per case (best is reported)")
+    bench.add_argument("--backends", nargs="+", default=["clarabel", "osqp"])
+    bench.add_argument("--output", type=Path, help="also write the table (markdown) here")
+    return parser
+
+
+def _print_header() -> None:
+    print(f"{'iter':>4} {'objective':>14} {'violation':>10} {'step':>10} {'trust':>10} {'ratio':>8} "
+          f"{'':>3} {'qp it':>5} {'time s':>8}")
+
+
+def _print_row(r: IterationRecord) -> None:
+    print(f"{r.iteration:>4} {r.objective:>14.8g} {r.violation:>10.2e} {r.step:>10.2e} {r.trust_radius:>10.2e} "
+          f"{r.ratio:>8.3f} {'' if r.accepted else 'rej':>3} {r.solver_iterations:>5} {r.time_s:>8.3f}")
+
+
+def _print_result(sol: Solution) -> None:
+    print(f"\n{sol.problem}: {sol.status} ({sol.message})")
+    print(f"  objective {sol.objective:.8g}   iterations {sol.iterations}   variables {sol.size.num_variables}"
+          f"   wall time {sol.wall_time_s:.3f} s")
+    v = sol.verification
+    if v is not None:
+        for c in v.checks:
+            rel = "<=" if c.sense == "max" else ">="
+            print(f"  {c.name:<24} worst {c.worst:<12.6g} {rel} {c.bound:g}")
+        finals = "   ".join(f"{k} {val:.3g}" for k, val in v.final_errors.items())
+        print(f"  {finals}\n  verification ({v.grid_points} points): {'passed' if v.passed else 'FAILED'}")
+
+
+def _write_outputs(sol: Solution, out: Path | None, summary_json: Path | None) -> None:
+    from convexguid.report.plots import plot_solution
+
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        if sol.dense is not None:
+            sol.dense.write_csv(out / "trajectory.csv")
+        if sol.nodes is not None:
+            sol.nodes.write_csv(out / "nodes.csv")
+        sol.write_summary(out / "summary.json")
+        plot_solution(sol, out)
+    if summary_json is not None:
+        sol.write_summary(summary_json)
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from convexguid.api import solve
+    from convexguid.spec import load_problem
+
+    spec = load_problem(args.problem, args.overrides)
+    if not args.quiet:
+        _print_header()
+    sol = solve(spec, log=None if args.quiet else _print_row)
+    _print_result(sol)
+    _write_outputs(sol, args.out, args.summary_json)
+    if not sol.ok:
+        reason = sol.message if sol.status != "converged" else "dense verification failed"
+        print(f"convexguid: {args.problem}: {sol.status}: {reason}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from convexguid.report.validation import validate
+
+    results = validate(args.problems, args.report)
+    for r in results:
+        print(f"{r.spec.name:<32} {r.solution.status:<12} {'matches paper' if r.ok else 'MISMATCH'}")
+    print(f"report written to {args.report}")
+    return EXIT_OK if all(r.ok for r in results) else EXIT_FAILED
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from convexguid.bench import run_bench
+
+    return run_bench(args.problem, args.nodes, args.repeat, args.backends, args.output)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    handlers = {"solve": _cmd_solve, "validate": _cmd_validate, "bench": _cmd_bench}
+    try:
+        return handlers[args.command](args)
+    except ConvexGuidError as exc:
+        print(f"convexguid: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("convexguid: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,187 @@
+"""IPOPT reference for the flat-output attitude problem (independent of the SCP code's maps).
+
+The transcription of :mod:`convexguid.formulations.flat_attitude` is solved once more as a
+single nonlinear program with CasADi + IPOPT (exact Hessians). Only the *transcription*
+is shared with the SCP code: the mapped-Chebyshev differentiation matrices, the
+quadrature weights, the path-interpolation matrix (nodes, check points, extra points)
+and the boundary-condition rows. The flat maps, the torque and the keep-out cones are
+written again here in CasADi symbols, so a sign slip in either implementation shows up
+as a different optimum.
+
+With :math:`Z \\in \\mathbb{R}^{(N+1)\\times 3}` the node values of
+:math:`\\zeta = (\\varphi, \\theta, \\psi)` (the decision vector ``x`` is ``Z`` node-major),
+:math:`s = 2/(t_f - t_0)`, :math:`\\dot Z = s D_1 Z`, :math:`\\ddot Z = s^2 D_2 Z`:
+
+.. math::
+
+    \\omega_1 = \\dot\\varphi - \\dot\\psi\\sin\\theta, \\quad
+    \\omega_2 = \\dot\\theta\\cos\\varphi + \\dot\\psi\\sin\\varphi\\cos\\theta, \\quad
+    \\omega_3 = -\\dot\\theta\\sin\\varphi + \\dot\\psi\\cos\\varphi\\cos\\theta,
+
+    u = I\\dot\\omega + \\omega \\times I\\omega, \\qquad
+    \\min_x \\sum_k w_k \\|u_k\\|^2, \\quad w = \\tfrac{t_f - t_0}{2} w^{cc} g'(\\tau),
+
+    \\text{s.t.}\\quad A x = b, \\quad |(P U)_{ij}| \\le u_{max}, \\quad
+    r_B^T C_{BI}(P Z)_{p}\\, r_I \\le \\cos\\beta.
+
+References
+----------
+Cai W., Zhu Y., Zeng P., "Differentially flat method of attitude maneuver trajectory
+planning for space vehicles under multiple constraints", J. Dynamics and Control 16(1),
+2018, DOI 10.6052/1672-6553-2018-005, eqs. (10)-(12), (26), (29)-(31).
+Waechter A., Biegler L. T., "On the implementation of an interior-point filter line-search
+algorithm for large-scale nonlinear programming", Math. Programming 106, 2006 (IPOPT).
+Andersson J. et al., "CasADi: a software framework for nonlinear optimization and optimal
+control", Math. Programming Computation 11, 2019.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from convexguid.formulations.flat_attitude import FlatAttitudeProblem, FlatAttitudeProgram
+
+
+@dataclass(frozen=True)
+class ReferenceResult:
+    """Outcome of a reference NLP solve.
+
+    Attributes
+    ----------
+    x : numpy.ndarray
+        Optimal decision vector, node-major Euler angles (``x.reshape(-1, 3)`` rows are roll, pitch, yaw), rad.
+    objective : float
+        Optimal energy :math:`\\sum_k w_k \\|u_k\\|^2`, N^2 m^2 s.
+    iterations : int
+        IPOPT iterations.
+    status : str
+        IPOPT's ``return_status`` (e.g. ``Solve_Succeeded``).
+    success : bool
+        Whether IPOPT reports success.
+    wall_time_s : float
+        Wall time of the solve call only, s.
+    setup_time_s : float
+        Wall time of building the CasADi NLP and the IPOPT solver object, s.
+    """
+
+    x: np.ndarray
+    objective: float
+    iterations: int
+    status: str
+    success: bool
+    wall_time_s: float
+    setup_time_s: float
+
+
+def casadi_available() -> bool:
+    """Whether the optional dependency ``casadi`` can be imported."""
+    return importlib.util.find_spec("casadi") is not None
+
+
+def _body_rates(ca: Any, z: Any, zd: Any) -> list[Any]:
+    """:math:`\\omega = E(\\zeta)\\dot\\zeta` (eq. 10), one column vector per body axis."""
+    p, t = z[:, 0], z[:, 1]
+    pd, td, yd = zd[:, 0], zd[:, 1], zd[:, 2]
+    return [pd - yd * ca.sin(t),
+            td * ca.cos(p) + yd * ca.sin(p) * ca.cos(t),
+            -td * ca.sin(p) + yd * ca.cos(p) * ca.cos(t)]
+
+
+def _body_accelerations(ca: Any, z: Any, zd: Any, zdd: Any) -> list[Any]:
+    """:math:`\\dot\\omega = E\\ddot\\zeta + \\dot E\\dot\\zeta` (eq. 11), the time derivative of :func:`_body_rates`."""
+    p, t = z[:, 0], z[:, 1]
+    pd, td, yd = zd[:, 0], zd[:, 1], zd[:, 2]
+    pdd, tdd, ydd = zdd[:, 0], zdd[:, 1], zdd[:, 2]
+    sp, cp, st, ct = ca.sin(p), ca.cos(p), ca.sin(t), ca.cos(t)
+    return [pdd - ydd * st - yd * td * ct,
+            tdd * cp - td * pd * sp + ydd * sp * ct + yd * (pd * cp * ct - td * sp * st),
+            -tdd * sp - td * pd * cp + ydd * cp * ct - yd * (pd * sp * ct + td * cp * st)]
+
+
+def _torques(ca: Any, inertia: np.ndarray, z: Any, zd: Any, zdd: Any) -> Any:
+    """:math:`u = I\\dot\\omega + \\omega\\times(I\\omega)` (eq. 12) with the full inertia matrix, (N+1) x 3."""
+    w = _body_rates(ca, z, zd)
+    wd = _body_accelerations(ca, z, zd, zdd)
+    iw = [sum(float(inertia[i, j]) * w[j] for j in range(3)) for i in range(3)]
+    iwd = [sum(float(inertia[i, j]) * wd[j] for j in range(3)) for i in range(3)]
+    gyro = [w[1] * iw[2] - w[2] * iw[1], w[2] * iw[0] - w[0] * iw[2], w[0] * iw[1] - w[1] * iw[0]]
+    return ca.horzcat(*[iwd[i] + gyro[i] for i in range(3)])
+
+
+def _cone_cosines(ca: Any, z: Any, body_axis: np.ndarray, inertial_dir: np.ndarray) -> Any:
+    """:math:`r_B^T C_{BI}(\\zeta) r_I` at each row of ``z`` (3-2-1 DCM, eq. 4), a column vector."""
+    sp, cp = ca.sin(z[:, 0]), ca.cos(z[:, 0])
+    st, ct = ca.sin(z[:, 1]), ca.cos(z[:, 1])
+    sy, cy = ca.sin(z[:, 2]), ca.cos(z[:, 2])
+    dcm = [[ct * cy, ct * sy, -st],
+           [sp * st * cy - cp * sy, sp * st * sy + cp * cy, sp * ct],
+           [cp * st * cy + sp * sy, cp * st * sy - sp * cy, cp * ct]]
+    return sum(float(body_axis[i] * inertial_dir[j]) * dcm[i][j]
+               for i in range(3) for j in range(3) if body_axis[i] * inertial_dir[j] != 0.0)
+
+
+def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray, tol: float = 1e-8) -> ReferenceResult:
+    """Solve the flat-attitude transcription of ``problem`` with CasADi + IPOPT from ``x0``.
+
+    Parameters
+    ----------
+    problem : FlatAttitudeProblem
+        The transcribed problem; its grid, quadrature weights, path-interpolation matrix
+        and boundary-condition rows (:meth:`FlatAttitudeProgram.linear_constraints`) are used as is.
+    x0 : numpy.ndarray
+        Initial guess, ``3 (N + 1)`` node-major Euler angles, rad.
+    tol : float, optional
+        IPOPT's ``tol`` (scaled NLP error), default ``1e-8``.
+
+    Returns
+    -------
+    ReferenceResult
+        Solution, objective, IPOPT status and iteration count, solve and setup times.
+
+    Raises
+    ------
+    ModuleNotFoundError
+        If ``casadi`` is not installed (``pip install convexguid[bench]``).
+    """
+    import casadi as ca
+
+    start = time.perf_counter()
+    n1 = problem.grid.n + 1
+    s = problem.time_scale
+    x = ca.SX.sym("x", 3 * n1)
+    z = ca.reshape(x, 3, n1).T  # CasADi reshapes column-major: row k is (roll, pitch, yaw) at node k
+    zd = s * ca.mtimes(ca.DM(np.asarray(problem.grid.d1)), z)
+    zdd = s * s * ca.mtimes(ca.DM(np.asarray(problem.grid.d2)), z)
+    u = _torques(ca, np.asarray(problem.inertia, dtype=float), z, zd, zdd)
+    weights = 0.5 * (problem.tf - problem.t0) * np.asarray(problem.grid.quadrature_weights)
+    objective = ca.dot(ca.DM(weights), ca.sum2(u * u))
+
+    path = ca.DM(np.asarray(problem.path_interpolation))
+    z_path = ca.mtimes(path, z)
+    u_path = ca.mtimes(path, u)
+    linear = FlatAttitudeProgram(problem).linear_constraints()
+    groups = [(ca.mtimes(ca.DM(linear.A), x), linear.b, linear.b),
+              (ca.vec(u_path), -problem.torque_max, problem.torque_max)]
+    for cone in problem.cones:
+        groups.append((_cone_cosines(ca, z_path, np.asarray(cone.body_axis), np.asarray(cone.inertial_dir)),
+                       -np.inf, np.cos(cone.half_angle_rad)))
+    g = ca.vertcat(*[expr for expr, _, _ in groups])
+    lbg = np.concatenate([np.broadcast_to(lo, (expr.numel(),)) for expr, lo, _ in groups])
+    ubg = np.concatenate([np.broadcast_to(hi, (expr.numel(),)) for expr, _, hi in groups])
+
+    options = {"ipopt.print_level": 0, "ipopt.tol": tol, "print_time": False, "ipopt.sb": "yes"}
+    solver = ca.nlpsol("flat_attitude_ipopt", "ipopt", {"x": x, "f": objective, "g": g}, options)
+    setup = time.perf_counter() - start
+
+    start = time.perf_counter()
+    sol = solver(x0=np.asarray(x0, dtype=float), lbg=lbg, ubg=ubg)
+    wall = time.perf_counter() - start
+    stats = solver.stats()
+    return ReferenceResult(x=np.asarray(sol["x"]).ravel(), objective=float(sol["f"]),
+                           iterations=int(stats.get("iter_count", -1)), status=str(stats["return_status"]),
+                           success=bool(stats["success"]), wall_time_s=wall, setup_time_s=setup)
