@@ -77,7 +77,7 @@ def test_real_problem_in_si_units() -> None:
     assert spec.verification.grid_points == 2001
     ref = spec.reference
     assert ref is not None and ref.table == "Table 1" and "10.6052/1672-6553-2018-005" in ref.citation
-    assert ref.values == {"objective": 0.2607, "num_variables": 99}
+    assert ref.values == {"objective": 0.2607, "num_variables": 99, "map_alpha": 0.9135}
     assert ref.tolerance_for("objective") == 5e-4 and ref.tolerance_for("num_variables") == 0
     assert ref.tolerance_for("other") == ref.rel_tol == 1e-3
     assert ref.max_values == {"iterations": 20}

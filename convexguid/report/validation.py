@@ -117,7 +117,8 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
     lines += ["| quantity | paper | convexguid | relative difference | within tolerance |", "|---|---|---|---|---|"]
     for row in r.rows:
         rel = "n/a" if row.rel_diff is None else f"{row.rel_diff:.2e}"
-        lines.append(f"| {row.quantity} | {_fmt(row.paper)} | {_fmt(row.ours)} | {rel} ({row.tolerance}) | "
+        paper = _fmt(row.paper) if row.rel_diff is not None or row.ours is None else f"limit {_fmt(row.paper)}"
+        lines.append(f"| {row.quantity} | {paper} | {_fmt(row.ours)} | {rel} ({row.tolerance}) | "
                      f"{'yes' if row.ok else 'NO'} |")
     if ref.notes:
         lines += ["", f"Reference notes: {' '.join(ref.notes.split())}"]
