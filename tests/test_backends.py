@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from convexguid.backends import ConicProgram, Cones, available_backends, make_backend
+from convexguid.backends import Cones, ConicProgram, available_backends, make_backend
 from convexguid.errors import BackendError
 
 

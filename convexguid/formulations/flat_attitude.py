@@ -7,7 +7,8 @@ variables are :math:`\\zeta` at the :math:`N+1` mapped CGL nodes (99 for :math:`
 
 .. math::
 
-    \\omega = E(\\zeta)\\dot\\zeta, \\qquad \\dot\\omega = E(\\zeta)\\ddot\\zeta + \\dot E(\\zeta,\\dot\\zeta)\\dot\\zeta,
+    \\omega = E(\\zeta)\\dot\\zeta, \\qquad
+    \\dot\\omega = E(\\zeta)\\ddot\\zeta + \\dot E(\\zeta,\\dot\\zeta)\\dot\\zeta,
     \\qquad u = I\\dot\\omega + \\omega\\times I\\omega,
 
     J = \\frac{t_f - t_0}{2} \\sum_k w^c_k g'(\\tau_k)\\, \\|u(\\lambda_k)\\|^2 \\quad \\text{(eq. 26)},
@@ -203,7 +204,10 @@ class FlatAttitudeProgram:
                                  (OutputBlock("torque_Nm", slice(0, 2 * rows), "N m"),))
 
     def _torque_jacobian(self, z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
-        """:math:`\\partial u_k/\\partial\\zeta_j = A_k\\delta_{kj} + s B_k D_{kj} + s^2 C_k D^{(2)}_{kj}` (complex step)."""
+        """Torque Jacobian from complex-step local partials :math:`A_k, B_k, C_k` of eq. (12).
+
+        .. math:: \\partial u_k/\\partial\\zeta_j = A_k\\delta_{kj} + s B_k D_{kj} + s^2 C_k D^{(2)}_{kj}
+        """
         p, s = self.problem, self.problem.time_scale
 
         def torque(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

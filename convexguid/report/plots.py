@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
 PLOT_GROUPS: dict[str, list[tuple[str, str, str, str]]] = {
-    # figure name: [(title, dense column prefix set, node column, y label)]
+    # family: [(file stem, title, "dense column|node column" template, y label)]
     "flat_attitude": [
         ("euler_angles", "Euler angles (3-2-1)", "{axis}_planned_deg|{axis}_deg", "angle [deg]"),
         ("body_rates", "Body rates", "omega{i}_degps|omega{i}_degps", "rate [deg/s]"),

@@ -128,7 +128,7 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
               f"{sol.timing.get('solver_s', float('nan')):.3f} s)."]
     v = sol.verification
     if v is not None:
-        lines += ["", f"Dense verification ({v.grid_points} points, SciPy DOP853 re-propagation of the planned control):",
+        lines += ["", f"Dense verification ({v.grid_points} points, SciPy DOP853 re-propagation of the plan):",
                   "", "| constraint | worst on dense grid | bound |", "|---|---|---|"]
         for c in v.checks:
             lines.append(f"| {c.name} | {c.worst:.6g} | {'<=' if c.sense == 'max' else '>='} {c.bound:g} |")

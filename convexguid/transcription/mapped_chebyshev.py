@@ -124,7 +124,8 @@ def barycentric_interpolation_matrix(x: np.ndarray, w: np.ndarray, points: np.nd
 
     .. math::
 
-        \\bar f(\\lambda) = \\sum_k \\frac{w_k f_k}{\\lambda - \\lambda_k} \\Big/ \\sum_k \\frac{w_k}{\\lambda - \\lambda_k}
+        \\bar f(\\lambda) = \\sum_k \\frac{w_k f_k}{\\lambda - \\lambda_k}
+                         \\Big/ \\sum_k \\frac{w_k}{\\lambda - \\lambda_k}
 
     A point that coincides with a node gets that node's value exactly.
     """
@@ -196,7 +197,7 @@ class MappedChebyshev:
 
     @cached_property
     def quadrature_weights(self) -> np.ndarray:
-        """:math:`w^c_k g'(\\tau_k)`: :math:`\\int_{-1}^1 f\\,d\\lambda \\approx \\sum_k` weight :math:`\\cdot f(\\lambda_k)`."""
+        """Weights of eq. (26): :math:`\\int_{-1}^1 f\\,d\\lambda \\approx \\sum_k w^c_k g'(\\tau_k) f(\\lambda_k)`."""
         cc = clenshaw_curtis_weights(self.n)[::-1]
         return _readonly(cc * kte_map_derivative(self.tau, self.alpha))
 
