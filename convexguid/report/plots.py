@@ -44,16 +44,8 @@ def plot_solution(solution: Solution, out_dir: Path) -> list[Path]:
                 ax.plot(solution.dense.t, solution.dense.columns[dense_col], color=color, label=label, lw=1.4)
             if solution.nodes is not None and node_col in solution.nodes.columns:
                 ax.plot(solution.nodes.t, solution.nodes.columns[node_col], "o", color=color, mfc="none", ms=4)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel(ylabel)
-        ax.set_title(f"{solution.problem}: {title} (circles: nodes)", fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        path = out_dir / f"{stem}.png"
-        fig.savefig(path)
-        plt.close(fig)
-        paths.append(path)
+        paths.append(_save(fig, ax, f"{solution.problem}: {title} (circles: nodes)", ylabel,
+                           out_dir / f"{stem}.png"))
     for name, values in (solution.dense.columns.items() if solution.dense else []):
         if name.startswith("keep_out_"):
             paths.append(_plot_keep_out(solution, name, values, out_dir))
@@ -67,13 +59,17 @@ def _plot_keep_out(solution: Solution, column: str, values, out_dir: Path) -> Pa
         check = {c.name: c for c in solution.verification.checks}.get(column)
         if check is not None:
             ax.axhline(check.bound, color="r", ls="--", label="keep-out half-angle")
+    return _save(fig, ax, f"{solution.problem}: {column}", "angle [deg]", out_dir / f"{column}.png")
+
+
+def _save(fig, ax, title: str, ylabel: str, path: Path) -> Path:
+    """Label a time-history axis, write the figure to ``path`` and close it."""
     ax.set_xlabel("time [s]")
-    ax.set_ylabel("angle [deg]")
-    ax.set_title(f"{solution.problem}: {column}", fontsize=9)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    path = out_dir / f"{column}.png"
     fig.savefig(path)
     plt.close(fig)
     return path
