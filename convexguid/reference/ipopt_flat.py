@@ -54,7 +54,8 @@ class ReferenceResult:
     Attributes
     ----------
     x : numpy.ndarray
-        Optimal decision vector, node-major Euler angles (``x.reshape(-1, 3)`` rows are roll, pitch, yaw), rad.
+        Optimal decision vector: node-major Euler angles, rad (``x.reshape(-1, 3)`` rows are
+        roll, pitch, yaw).
     objective : float
         Optimal energy :math:`\\sum_k w_k \\|u_k\\|^2`, N^2 m^2 s.
     iterations : int
@@ -83,50 +84,56 @@ def casadi_available() -> bool:
     return importlib.util.find_spec("casadi") is not None
 
 
-def _body_rates(ca: Any, z: Any, zd: Any) -> list[Any]:
-    """:math:`\\omega = E(\\zeta)\\dot\\zeta` (eq. 10), one column vector per body axis."""
-    p, t = z[:, 0], z[:, 1]
-    pd, td, yd = zd[:, 0], zd[:, 1], zd[:, 2]
-    return [pd - yd * ca.sin(t),
-            td * ca.cos(p) + yd * ca.sin(p) * ca.cos(t),
-            -td * ca.sin(p) + yd * ca.cos(p) * ca.cos(t)]
+def _body_rates(ca: Any, z: Any, zd: Any) -> Any:
+    """:math:`\\omega = E(\\zeta)\\dot\\zeta` (eq. 10) at one point; ``z``, ``zd`` are 3-vectors."""
+    p, t = z[0], z[1]
+    pd, td, yd = zd[0], zd[1], zd[2]
+    return ca.vertcat(pd - yd * ca.sin(t),
+                      td * ca.cos(p) + yd * ca.sin(p) * ca.cos(t),
+                      -td * ca.sin(p) + yd * ca.cos(p) * ca.cos(t))
 
 
-def _body_accelerations(ca: Any, z: Any, zd: Any, zdd: Any) -> list[Any]:
-    """:math:`\\dot\\omega = E\\ddot\\zeta + \\dot E\\dot\\zeta` (eq. 11), the time derivative of :func:`_body_rates`."""
-    p, t = z[:, 0], z[:, 1]
-    pd, td, yd = zd[:, 0], zd[:, 1], zd[:, 2]
-    pdd, tdd, ydd = zdd[:, 0], zdd[:, 1], zdd[:, 2]
+def _body_acceleration(ca: Any, z: Any, zd: Any, zdd: Any) -> Any:
+    """:math:`\\dot\\omega = E\\ddot\\zeta + \\dot E\\dot\\zeta` (eq. 11) at one point."""
+    p, t = z[0], z[1]
+    pd, td, yd = zd[0], zd[1], zd[2]
+    pdd, tdd, ydd = zdd[0], zdd[1], zdd[2]
     sp, cp, st, ct = ca.sin(p), ca.cos(p), ca.sin(t), ca.cos(t)
-    return [pdd - ydd * st - yd * td * ct,
-            tdd * cp - td * pd * sp + ydd * sp * ct + yd * (pd * cp * ct - td * sp * st),
-            -tdd * sp - td * pd * cp + ydd * cp * ct - yd * (pd * sp * ct + td * cp * st)]
+    return ca.vertcat(pdd - ydd * st - yd * td * ct,
+                      tdd * cp - td * pd * sp + ydd * sp * ct + yd * (pd * cp * ct - td * sp * st),
+                      -tdd * sp - td * pd * cp + ydd * cp * ct - yd * (pd * sp * ct + td * cp * st))
 
 
-def _torques(ca: Any, inertia: np.ndarray, z: Any, zd: Any, zdd: Any) -> Any:
-    """:math:`u = I\\dot\\omega + \\omega\\times(I\\omega)` (eq. 12) with the full inertia matrix, (N+1) x 3."""
-    w = _body_rates(ca, z, zd)
-    wd = _body_accelerations(ca, z, zd, zdd)
-    iw = [sum(float(inertia[i, j]) * w[j] for j in range(3)) for i in range(3)]
-    iwd = [sum(float(inertia[i, j]) * wd[j] for j in range(3)) for i in range(3)]
-    gyro = [w[1] * iw[2] - w[2] * iw[1], w[2] * iw[0] - w[0] * iw[2], w[0] * iw[1] - w[1] * iw[0]]
-    return ca.horzcat(*[iwd[i] + gyro[i] for i in range(3)])
+def _torque_function(ca: Any, inertia: np.ndarray) -> Any:
+    """CasADi function :math:`u = I\\dot\\omega + \\omega\\times(I\\omega)` (eq. 12) of one node."""
+    z, zd, zdd = ca.SX.sym("z", 3), ca.SX.sym("zd", 3), ca.SX.sym("zdd", 3)
+    inertia_dm = ca.DM(np.asarray(inertia, dtype=float))
+    omega, omega_dot = _body_rates(ca, z, zd), _body_acceleration(ca, z, zd, zdd)
+    u = ca.mtimes(inertia_dm, omega_dot) + ca.cross(omega, ca.mtimes(inertia_dm, omega))
+    return ca.Function("flat_torque", [z, zd, zdd], [u])
 
 
-def _cone_cosines(ca: Any, z: Any, body_axis: np.ndarray, inertial_dir: np.ndarray) -> Any:
-    """:math:`r_B^T C_{BI}(\\zeta) r_I` at each row of ``z`` (3-2-1 DCM, eq. 4), a column vector."""
-    sp, cp = ca.sin(z[:, 0]), ca.cos(z[:, 0])
-    st, ct = ca.sin(z[:, 1]), ca.cos(z[:, 1])
-    sy, cy = ca.sin(z[:, 2]), ca.cos(z[:, 2])
-    dcm = [[ct * cy, ct * sy, -st],
-           [sp * st * cy - cp * sy, sp * st * sy + cp * cy, sp * ct],
-           [cp * st * cy + sp * sy, cp * st * sy - sp * cy, cp * ct]]
-    return sum(float(body_axis[i] * inertial_dir[j]) * dcm[i][j]
-               for i in range(3) for j in range(3) if body_axis[i] * inertial_dir[j] != 0.0)
+def _cone_function(ca: Any, body_axis: np.ndarray, inertial_dir: np.ndarray) -> Any:
+    """CasADi function :math:`r_B^T C_{BI}(\\zeta) r_I` of one point's Euler angles (3-2-1 DCM, eq. 4)."""
+    z = ca.SX.sym("z", 3)
+    sp, cp, st = ca.sin(z[0]), ca.cos(z[0]), ca.sin(z[1])
+    ct, sy, cy = ca.cos(z[1]), ca.sin(z[2]), ca.cos(z[2])
+    dcm = ca.vertcat(ca.horzcat(ct * cy, ct * sy, -st),
+                     ca.horzcat(sp * st * cy - cp * sy, sp * st * sy + cp * cy, sp * ct),
+                     ca.horzcat(cp * st * cy + sp * sy, cp * st * sy - sp * cy, cp * ct))
+    value = ca.mtimes(ca.DM(np.asarray(body_axis, dtype=float)).T,
+                      ca.mtimes(dcm, ca.DM(np.asarray(inertial_dir, dtype=float))))
+    return ca.Function("cone_cosine", [z], [value])
 
 
-def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray, tol: float = 1e-8) -> ReferenceResult:
+def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray,
+                              tol: float = 1e-8) -> ReferenceResult:
     """Solve the flat-attitude transcription of ``problem`` with CasADi + IPOPT from ``x0``.
+
+    The pointwise maps (torque, cone cosine) are CasADi ``SX`` functions of one node,
+    mapped over the nodes; the dense linear maps (differentiation, path interpolation,
+    boundary rows) stay single matrix products in an ``MX`` graph. Expanding everything
+    to ``SX`` gives the same iterates but takes minutes to set up for :math:`N = 128`.
 
     Parameters
     ----------
@@ -153,28 +160,28 @@ def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray, tol:
     start = time.perf_counter()
     n1 = problem.grid.n + 1
     s = problem.time_scale
-    x = ca.SX.sym("x", 3 * n1)
-    z = ca.reshape(x, 3, n1).T  # CasADi reshapes column-major: row k is (roll, pitch, yaw) at node k
-    zd = s * ca.mtimes(ca.DM(np.asarray(problem.grid.d1)), z)
-    zdd = s * s * ca.mtimes(ca.DM(np.asarray(problem.grid.d2)), z)
-    u = _torques(ca, np.asarray(problem.inertia, dtype=float), z, zd, zdd)
+    x = ca.MX.sym("x", 3 * n1)
+    z = ca.reshape(x, 3, n1)  # column k is (roll, pitch, yaw) at node k: x is node-major
+    zd = s * ca.mtimes(z, ca.DM(np.asarray(problem.grid.d1).T))
+    zdd = s * s * ca.mtimes(z, ca.DM(np.asarray(problem.grid.d2).T))
+    u = _torque_function(ca, problem.inertia).map(n1)(z, zd, zdd)
     weights = 0.5 * (problem.tf - problem.t0) * np.asarray(problem.grid.quadrature_weights)
-    objective = ca.dot(ca.DM(weights), ca.sum2(u * u))
+    objective = ca.mtimes(ca.sum1(u * u), ca.DM(weights))
 
-    path = ca.DM(np.asarray(problem.path_interpolation))
-    z_path = ca.mtimes(path, z)
-    u_path = ca.mtimes(path, u)
+    path = ca.DM(np.asarray(problem.path_interpolation).T)
+    n_path = path.shape[1]
+    z_path = ca.mtimes(z, path)
     linear = FlatAttitudeProgram(problem).linear_constraints()
     groups = [(ca.mtimes(ca.DM(linear.A), x), linear.b, linear.b),
-              (ca.vec(u_path), -problem.torque_max, problem.torque_max)]
+              (ca.vec(ca.mtimes(u, path)), -problem.torque_max, problem.torque_max)]
     for cone in problem.cones:
-        groups.append((_cone_cosines(ca, z_path, np.asarray(cone.body_axis), np.asarray(cone.inertial_dir)),
-                       -np.inf, np.cos(cone.half_angle_rad)))
+        cosine = _cone_function(ca, cone.body_axis, cone.inertial_dir).map(n_path)(z_path)
+        groups.append((cosine.T, -np.inf, np.cos(cone.half_angle_rad)))
     g = ca.vertcat(*[expr for expr, _, _ in groups])
     lbg = np.concatenate([np.broadcast_to(lo, (expr.numel(),)) for expr, lo, _ in groups])
     ubg = np.concatenate([np.broadcast_to(hi, (expr.numel(),)) for expr, _, hi in groups])
 
-    options = {"ipopt.print_level": 0, "ipopt.tol": tol, "print_time": False, "ipopt.sb": "yes"}
+    options = {"ipopt.print_level": 0, "ipopt.tol": tol, "ipopt.sb": "yes", "print_time": False}
     solver = ca.nlpsol("flat_attitude_ipopt", "ipopt", {"x": x, "f": objective, "g": g}, options)
     setup = time.perf_counter() - start
 

@@ -1,0 +1,266 @@
+"""``convexguid bench``: time the SCP against IPOPT on the same flat-attitude transcription.
+
+For every polynomial degree :math:`N` the problem file is transcribed once
+(:func:`convexguid.formulations.flat_attitude.build_problem`) and solved from the
+same initial guess (:meth:`FlatAttitudeProgram.initial_guess`)
+
+- by the SCP engine (:func:`convexguid.scp.engine.solve_scp`), once per convex backend, and
+- by CasADi + IPOPT with exact Hessians (:func:`convexguid.reference.solve_flat_attitude_ipopt`),
+  when ``casadi`` is installed.
+
+Both methods solve the identical transcription: the torque box and the keep-out cones
+at the nodes and at the check points between them. The path-constraint refinement
+loop of ``convexguid solve`` is left out, so the SCP here is one :func:`solve_scp` call.
+Every case runs ``repeat`` times and the fastest run is reported.
+"""
+
+from __future__ import annotations
+
+import datetime
+import importlib.metadata
+import os
+import platform
+import shlex
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from os import PathLike
+from pathlib import Path
+
+import numpy as np
+
+from convexguid.formulations.flat_attitude import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
+from convexguid.reference import casadi_available, solve_flat_attitude_ipopt
+from convexguid.scp.engine import SCPResult, solve_scp
+from convexguid.scp.problem import SCPSettings
+from convexguid.spec import load_problem
+
+IPOPT_TOLERANCE = 1e-8
+"""IPOPT's ``tol`` in the benchmark (tighter than the SCP's, so IPOPT's objective is the reference)."""
+
+COLUMNS = ("N", "method", "status", "objective", "iterations", "wall s", "convexify s", "solver s",
+           "overhead s", "setup s", "IPOPT/SCP time")
+"""Table columns; ``setup s`` is IPOPT's model construction, outside its wall time."""
+
+
+@dataclass(frozen=True)
+class BenchRow:
+    """One method on one grid: status, objective, iterations and the best of ``repeat`` timings (s).
+
+    Timings that do not apply to the method are ``None`` (printed as ``-``).
+    """
+
+    nodes: int
+    method: str
+    status: str
+    objective: float | None = None
+    iterations: int | None = None
+    wall_s: float | None = None
+    convexify_s: float | None = None
+    solver_s: float | None = None
+    overhead_s: float | None = None
+    setup_s: float | None = None
+    ratio: float | None = None
+
+    def cells(self) -> list[str]:
+        """The row as strings, in the order of :data:`COLUMNS`."""
+        def num(v: float | None, fmt: str) -> str:
+            return "-" if v is None else format(v, fmt)
+
+        return [str(self.nodes), self.method, self.status, num(self.objective, ".8g"),
+                "-" if self.iterations is None else str(self.iterations), num(self.wall_s, ".4f"),
+                num(self.convexify_s, ".4f"), num(self.solver_s, ".4f"), num(self.overhead_s, ".4f"),
+                num(self.setup_s, ".4f"), num(self.ratio, ".2f")]
+
+
+def _one_line(text: str, limit: int = 60) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _time_scp(program: FlatAttitudeProgram, settings: SCPSettings, x0: np.ndarray, repeat: int) -> SCPResult:
+    """Fastest of ``repeat`` SCP runs from ``x0``."""
+    runs = [solve_scp(program, settings, x0=x0) for _ in range(max(1, repeat))]
+    return min(runs, key=lambda r: r.wall_time_s)
+
+
+def _scp_row(nodes: int, backend: str, program: FlatAttitudeProgram, settings: SCPSettings,
+             x0: np.ndarray, repeat: int) -> BenchRow:
+    method = f"scp/{backend}"
+    try:
+        r = _time_scp(program, settings, x0, repeat)
+    except Exception as exc:  # noqa: BLE001 - one failing backend must not abort the benchmark
+        return BenchRow(nodes, method, f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}")
+    return BenchRow(nodes, method, r.status, r.objective, r.iterations, r.wall_time_s, r.convexify_time_s,
+                    r.solver_time_s, r.overhead_time_s)
+
+
+def _ipopt_row(nodes: int, problem: FlatAttitudeProblem, x0: np.ndarray, repeat: int) -> BenchRow:
+    """Fastest of ``repeat`` IPOPT solves; the setup time is the fastest model construction."""
+    try:
+        runs = [solve_flat_attitude_ipopt(problem, x0, IPOPT_TOLERANCE) for _ in range(max(1, repeat))]
+    except Exception as exc:  # noqa: BLE001 - report and go on
+        return BenchRow(nodes, "ipopt", f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}")
+    best = min(runs, key=lambda r: r.wall_time_s)
+    return BenchRow(nodes, "ipopt", best.status, best.objective, best.iterations, best.wall_time_s,
+                    setup_s=min(r.setup_time_s for r in runs))
+
+
+def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, backends: Sequence[str],
+                with_ipopt: bool) -> list[BenchRow]:
+    """Benchmark rows of one grid size: one per SCP backend, then IPOPT (if ``with_ipopt``).
+
+    Parameters
+    ----------
+    problem_path : str or path-like
+        ``flat_attitude`` problem file; ``discretization.nodes`` is overridden with ``nodes``.
+    nodes : int
+        Polynomial degree :math:`N` (:math:`N + 1` nodes).
+    repeat : int
+        Timed runs per method; the fastest is kept.
+    backends : sequence of str
+        Convex backends of the SCP (see :mod:`convexguid.backends`).
+    with_ipopt : bool
+        Also solve with CasADi + IPOPT.
+
+    Returns
+    -------
+    list of BenchRow
+        With ``ratio`` = IPOPT solve time / SCP wall time on the SCP rows when IPOPT ran.
+    """
+    spec = load_problem(problem_path, [f"discretization.nodes={nodes}"])
+    problem = build_problem(spec)
+    program = FlatAttitudeProgram(problem)
+    x0 = program.initial_guess()
+    s = spec.solver
+    rows = []
+    for backend in backends:
+        settings = SCPSettings(backend=backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
+                               trust_region=s.trust_region, penalty=s.penalty)
+        rows.append(_scp_row(nodes, backend, program, settings, x0, repeat))
+    if not with_ipopt:
+        return rows
+    ipopt = _ipopt_row(nodes, problem, x0, repeat)
+    if ipopt.wall_s is not None:
+        rows = [replace(r, ratio=ipopt.wall_s / r.wall_s) if r.wall_s else r for r in rows]
+    return [*rows, ipopt]
+
+
+def _text_table(rows: Sequence[BenchRow]) -> str:
+    cells = [list(COLUMNS)] + [r.cells() for r in rows]
+    widths = [max(len(row[i]) for row in cells) for i in range(len(COLUMNS))]
+    left = {1, 2}  # method and status are text
+    lines = ["  ".join(c.ljust(w) if i in left else c.rjust(w)
+                       for i, (c, w) in enumerate(zip(row, widths, strict=True))) for row in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def _markdown_table(rows: Sequence[BenchRow]) -> str:
+    align = ["---:", ":---", ":---"] + ["---:"] * (len(COLUMNS) - 3)
+    lines = ["| " + " | ".join(COLUMNS) + " |", "| " + " | ".join(align) + " |"]
+    lines += ["| " + " | ".join(c.replace("|", "\\|") for c in r.cells()) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _version(package: str) -> str:
+    try:
+        return importlib.metadata.version(package)
+    except importlib.metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def _command(problem_path: str | PathLike[str], nodes_list: Sequence[int], repeat: int,
+             backends: Sequence[str], output_path: str | PathLike[str] | None) -> str:
+    """The ``convexguid bench`` command line that reproduces this run."""
+    args = ["convexguid", "bench", str(problem_path), "--nodes", *map(str, nodes_list),
+            "--repeat", str(repeat), "--backends", *backends]
+    if output_path is not None:
+        args += ["--output", str(output_path)]
+    return shlex.join(args)
+
+
+def _agreement(rows: Sequence[BenchRow]) -> list[str]:
+    """Per grid: the largest relative gap between an SCP objective and IPOPT's."""
+    lines = []
+    for n in dict.fromkeys(r.nodes for r in rows):
+        solved = [r for r in rows if r.nodes == n and r.objective is not None]
+        ipopt = [r.objective for r in solved if r.method == "ipopt"]
+        scp = [r.objective for r in solved if r.method != "ipopt"]
+        if ipopt and scp:
+            gap = max(abs(o - ipopt[0]) for o in scp) / abs(ipopt[0])
+            lines.append(f"N = {n}: largest relative objective gap SCP vs IPOPT {gap:.2e}")
+    return lines
+
+
+def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLike[str],
+              ipopt_note: str | None) -> str:
+    machine = platform.processor() or platform.machine()
+    versions = ", ".join(f"{p} {_version(p)}" for p in ("numpy", "clarabel", "osqp", "casadi"))
+    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    header = [
+        f"# convexguid benchmark: SCP vs IPOPT on `{Path(problem_path).name}`",
+        "",
+        f"- Machine: {machine}, {os.cpu_count()} logical CPUs ({platform.platform()}, "
+        f"Python {platform.python_version()})",
+        f"- Versions: {versions}",
+        f"- Date: {when}",
+        f"- Command: `{command}`",
+        "",
+        "Both methods solve the identical transcription (mapped Chebyshev, torque box and keep-out cones "
+        "at the nodes and the check points between them) from the same initial guess; the path-constraint "
+        "refinement of `convexguid solve` is not run. Times are the best of the repeats, in seconds. "
+        "For the SCP, `wall s` = `convexify s` (maps and Jacobians) + `solver s` (convex backend) "
+        "+ `overhead s` (assembly, bookkeeping). For IPOPT (CasADi, exact Hessian, MUMPS, "
+        f"tol = {IPOPT_TOLERANCE:g}), `wall s` is the solve call only and `setup s` builds the CasADi model. "
+        "`IPOPT/SCP time` = IPOPT wall time / SCP wall time (above 1: the SCP is faster).",
+    ]
+    if ipopt_note:
+        header += ["", ipopt_note]
+    footer = [f"- {line}" for line in _agreement(rows)]
+    return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
+
+
+def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int], repeat: int,
+              backends: Sequence[str], output_path: str | PathLike[str] | None = None) -> int:
+    """Time the SCP (each backend) and IPOPT on ``problem_path`` for every grid size in ``nodes_list``.
+
+    Parameters
+    ----------
+    problem_path : str or path-like
+        ``flat_attitude`` problem file.
+    nodes_list : sequence of int
+        Polynomial degrees :math:`N` to benchmark.
+    repeat : int
+        Timed runs per case; the fastest is reported.
+    backends : sequence of str
+        Convex backends of the SCP; a backend that fails is reported as ``failed: <reason>``.
+    output_path : str or path-like, optional
+        Also write the table as markdown, with machine, versions, date and command.
+
+    Returns
+    -------
+    int
+        Exit code, 0.
+    """
+    with_ipopt = casadi_available()
+    ipopt_note = None if with_ipopt else (
+        "IPOPT column skipped: casadi is not installed (pip install 'convexguid[bench]').")
+    if ipopt_note:
+        print(ipopt_note)
+    rows: list[BenchRow] = []
+    for nodes in nodes_list:
+        new = bench_nodes(problem_path, nodes, repeat, backends, with_ipopt)
+        rows += new
+        for r in new:
+            print(f"  done: N = {r.nodes:<4} {r.method:<14} {r.status}", flush=True)
+    print()
+    print(_text_table(rows))
+    for line in _agreement(rows):
+        print(line)
+    if output_path is not None:
+        command = _command(problem_path, nodes_list, repeat, backends, output_path)
+        path = Path(output_path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(_markdown(rows, command, problem_path, ipopt_note), encoding="utf-8")
+        print(f"table written to {path}")
+    return 0
