@@ -46,7 +46,8 @@ COLUMNS = ("N", "method", "status", "objective", "iterations", "wall s", "convex
 class BenchRow:
     """One method on one grid: status, objective, iterations and the best of ``repeat`` timings (s).
 
-    Timings that do not apply to the method are ``None`` (printed as ``-``).
+    Timings that do not apply to the method are ``None`` (printed as ``-``); ``ok`` is whether
+    the method converged (IPOPT: reported success); ``message`` explains a failure (not in the table).
     """
 
     nodes: int
@@ -60,6 +61,8 @@ class BenchRow:
     overhead_s: float | None = None
     setup_s: float | None = None
     ratio: float | None = None
+    ok: bool = False
+    message: str = ""
 
     def cells(self) -> list[str]:
         """The row as strings, in the order of :data:`COLUMNS`."""
@@ -89,9 +92,10 @@ def _scp_row(nodes: int, backend: str, program: FlatAttitudeProgram, settings: S
     try:
         r = _time_scp(program, settings, x0, repeat)
     except Exception as exc:  # noqa: BLE001 - one failing backend must not abort the benchmark
-        return BenchRow(nodes, method, f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}")
+        return BenchRow(nodes, method, f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}",
+                        message=f"{type(exc).__name__}: {exc}")
     return BenchRow(nodes, method, r.status, r.objective, r.iterations, r.wall_time_s, r.convexify_time_s,
-                    r.solver_time_s, r.overhead_time_s)
+                    r.solver_time_s, r.overhead_time_s, ok=r.status == "converged", message=r.message)
 
 
 def _ipopt_row(nodes: int, problem: FlatAttitudeProblem, x0: np.ndarray, repeat: int) -> BenchRow:
@@ -99,10 +103,12 @@ def _ipopt_row(nodes: int, problem: FlatAttitudeProblem, x0: np.ndarray, repeat:
     try:
         runs = [solve_flat_attitude_ipopt(problem, x0, IPOPT_TOLERANCE) for _ in range(max(1, repeat))]
     except Exception as exc:  # noqa: BLE001 - report and go on
-        return BenchRow(nodes, "ipopt", f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}")
+        return BenchRow(nodes, "ipopt", f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}",
+                        message=f"{type(exc).__name__}: {exc}")
     best = min(runs, key=lambda r: r.wall_time_s)
     return BenchRow(nodes, "ipopt", best.status, best.objective, best.iterations, best.wall_time_s,
-                    setup_s=min(r.setup_time_s for r in runs))
+                    setup_s=min(r.setup_time_s for r in runs), ok=best.success,
+                    message="" if best.success else f"IPOPT returned {best.status}")
 
 
 def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, backends: Sequence[str],
@@ -125,7 +131,7 @@ def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, back
     Returns
     -------
     list of BenchRow
-        With ``ratio`` = IPOPT solve time / SCP wall time on the SCP rows when IPOPT ran.
+        With ``ratio`` = IPOPT solve time / SCP wall time on the converged SCP rows when IPOPT succeeded.
     """
     spec = load_problem(problem_path, [f"discretization.nodes={nodes}"])
     problem = build_problem(spec)
@@ -140,8 +146,8 @@ def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, back
     if not with_ipopt:
         return rows
     ipopt = _ipopt_row(nodes, problem, x0, repeat)
-    if ipopt.wall_s is not None:
-        rows = [replace(r, ratio=ipopt.wall_s / r.wall_s) if r.wall_s else r for r in rows]
+    if ipopt.ok and ipopt.wall_s is not None:
+        rows = [replace(r, ratio=ipopt.wall_s / r.wall_s) if r.ok and r.wall_s else r for r in rows]
     return [*rows, ipopt]
 
 
@@ -179,16 +185,20 @@ def _command(problem_path: str | PathLike[str], nodes_list: Sequence[int], repea
     return shlex.join(args)
 
 
-def _agreement(rows: Sequence[BenchRow]) -> list[str]:
-    """Per grid: the largest relative gap between an SCP objective and IPOPT's."""
+def _notes(rows: Sequence[BenchRow]) -> list[str]:
+    """Per grid: the largest relative gap between a converged SCP objective and IPOPT's; then failures."""
     lines = []
     for n in dict.fromkeys(r.nodes for r in rows):
-        solved = [r for r in rows if r.nodes == n and r.objective is not None]
+        solved = [r for r in rows if r.nodes == n and r.ok and r.objective is not None]
         ipopt = [r.objective for r in solved if r.method == "ipopt"]
         scp = [r.objective for r in solved if r.method != "ipopt"]
         if ipopt and scp:
             gap = max(abs(o - ipopt[0]) for o in scp) / abs(ipopt[0])
-            lines.append(f"N = {n}: largest relative objective gap SCP vs IPOPT {gap:.2e}")
+            lines.append(f"N = {n}: largest relative objective gap, converged SCP vs IPOPT: {gap:.2e}")
+    for r in rows:
+        if not r.ok:
+            status = "failed" if r.status.startswith("failed") else r.status
+            lines.append(f"N = {r.nodes}, {r.method}: {status}: {_one_line(r.message, 200)}")
     return lines
 
 
@@ -212,11 +222,11 @@ def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLi
         "For the SCP, `wall s` = `convexify s` (maps and Jacobians) + `solver s` (convex backend) "
         "+ `overhead s` (assembly, bookkeeping). For IPOPT (CasADi, exact Hessian, MUMPS, "
         f"tol = {IPOPT_TOLERANCE:g}), `wall s` is the solve call only and `setup s` builds the CasADi model. "
-        "`IPOPT/SCP time` = IPOPT wall time / SCP wall time (above 1: the SCP is faster).",
+        "`IPOPT/SCP time` = IPOPT wall time / SCP wall time, converged runs only (above 1: SCP faster).",
     ]
     if ipopt_note:
         header += ["", ipopt_note]
-    footer = [f"- {line}" for line in _agreement(rows)]
+    footer = [f"- {line}" for line in _notes(rows)]
     return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
 
 
@@ -255,7 +265,7 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int], repe
             print(f"  done: N = {r.nodes:<4} {r.method:<14} {r.status}", flush=True)
     print()
     print(_text_table(rows))
-    for line in _agreement(rows):
+    for line in _notes(rows):
         print(line)
     if output_path is not None:
         command = _command(problem_path, nodes_list, repeat, backends, output_path)
