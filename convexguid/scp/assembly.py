@@ -76,7 +76,7 @@ class SubproblemAssembler:
         self.linear_cost, self.weights = linear_cost, weights
         n_a, n_g, n_o = linear.A.shape[0], linear.G.shape[0], outputs.M.shape[0]
         self.n_slack = n_o + n_ineq + n_eq
-        self.num_z = n + self.num_residuals_cols + self.n_slack
+        self.num_z = n + self.m + self.n_slack
         y0, so0, sg0, t0 = n, n + self.m, n + self.m + n_o, n + self.m + n_o + n_ineq
         self.cones = Cones(zero=n_a + self.m, nonneg=n_g + n_o + n_ineq + 2 * n_eq + self.n_slack + 2 * n)
         pat = _Pattern((self.cones.rows, self.num_z))
@@ -108,10 +108,6 @@ class SubproblemAssembler:
         diag = np.arange(n, n + self.m)
         self.P = sp.csc_matrix((2.0 * weights, (diag, diag)), shape=(self.num_z, self.num_z))
         self.q = np.concatenate([linear_cost, np.zeros(self.m), np.zeros(self.n_slack)])
-
-    @property
-    def num_residuals_cols(self) -> int:
-        return self.m
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float) -> ConicProgram:
         """The subproblem about ``x`` (``ev`` must carry Jacobians)."""

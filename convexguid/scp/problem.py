@@ -18,7 +18,7 @@ A formulation implements :class:`NonconvexProgram`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -143,4 +143,3 @@ class SCPSettings:
     shrink_ratio: float = 0.25
     expand_ratio: float = 0.75
     backend_tolerance: float = 1e-8
-    extra: dict = field(default_factory=dict)
