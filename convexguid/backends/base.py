@@ -63,7 +63,9 @@ class BackendResult:
 
     ``status`` is one of ``optimal``, ``optimal_inaccurate``, ``infeasible``,
     ``unbounded``, ``failed``. Residuals are the backend's own primal and dual
-    residuals so that optimality can be checked rather than assumed.
+    residuals so that optimality can be checked rather than assumed. ``z`` holds the
+    multipliers of the rows of ``A x + s = b`` (nonnegative on the ``nonneg`` rows), when
+    the backend reports them.
     """
 
     status: str
@@ -73,6 +75,7 @@ class BackendResult:
     solve_time_s: float
     primal_residual: float
     dual_residual: float
+    z: np.ndarray | None = None
 
     @property
     def usable(self) -> bool:

@@ -64,8 +64,9 @@ class ClarabelBackend(Backend):
         elapsed = time.perf_counter() - start
         status = _CLARABEL_STATUS.get(str(sol.status), "failed")
         x = np.asarray(sol.x) if status.startswith("optimal") else None
+        z = np.asarray(sol.z) if x is not None else None
         return BackendResult(status, x, float(sol.obj_val), int(sol.iterations), elapsed,
-                             float(sol.r_prim), float(sol.r_dual))
+                             float(sol.r_prim), float(sol.r_dual), z)
 
 
 class OsqpBackend(Backend):
@@ -100,8 +101,9 @@ class OsqpBackend(Backend):
         elapsed = time.perf_counter() - start
         status = _OSQP_STATUS.get(str(res.info.status), "failed")
         x = np.asarray(res.x) if status.startswith("optimal") else None
+        z = np.asarray(res.y) if x is not None else None  # l <= Ax <= u: y > 0 on active upper bounds
         return BackendResult(status, x, float(res.info.obj_val), int(res.info.iter), elapsed,
-                             float(res.info.prim_res), float(res.info.dual_res))
+                             float(res.info.prim_res), float(res.info.dual_res), z)
 
 
 class QpsolversBackend(Backend):
@@ -133,5 +135,6 @@ class QpsolversBackend(Backend):
         elapsed = time.perf_counter() - start
         if not sol.found or sol.x is None:
             return BackendResult("failed", None, float("nan"), 0, elapsed, float("nan"), float("nan"))
+        z = np.concatenate([sol.y, sol.z]) if sol.y is not None and sol.z is not None else None
         return BackendResult("optimal", np.asarray(sol.x), float(sol.obj if sol.obj is not None else np.nan),
-                             0, elapsed, float(sol.primal_residual()), float(sol.dual_residual()))
+                             0, elapsed, float(sol.primal_residual()), float(sol.dual_residual()), z)

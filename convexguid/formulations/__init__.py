@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from convexguid.formulations.flat_attitude import solve_flat_attitude
+from convexguid.formulations.rendezvous import solve_rendezvous
 
-FAMILY_SOLVERS: dict[str, Callable] = {"flat_attitude": solve_flat_attitude}
+FAMILY_SOLVERS: dict[str, Callable] = {"flat_attitude": solve_flat_attitude, "rendezvous": solve_rendezvous}
 """Solve function of each family, by the spec's ``family`` value."""

@@ -36,6 +36,10 @@ def _series(template: str) -> list[tuple[str, str, str]]:
 def plot_solution(solution: Solution, out_dir: Path) -> list[Path]:
     """Write one PNG per plot group of the solution's family; return the paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
+    if solution.family == "rendezvous":
+        from convexguid.report.rendezvous_plots import plot_rendezvous
+
+        return plot_rendezvous(solution, out_dir, _save)
     paths = []
     for stem, title, template, ylabel in PLOT_GROUPS.get(solution.family, []):
         fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)

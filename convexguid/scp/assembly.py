@@ -15,7 +15,8 @@ linearized equalities (an exact l1 penalty, so every subproblem is feasible):
     g + \\nabla g\\, d \\le s_g,\\quad |e + \\nabla e\\, d| \\le t,\\quad
     s_o, s_g, t \\ge 0,\\quad |d_i| \\le \\Delta\\,\\sigma_i
 
-with :math:`\\Delta` the trust radius and :math:`\\sigma` the variable scale. The
+with :math:`\\Delta` the trust radius and :math:`\\sigma` the variable scale; the backend sees
+the scaled step :math:`d_i/\\sigma_i` (columns scaled), so metres and radians weigh alike. The
 Hessian is diagonal and the dense Jacobian of :math:`r` appears once, not in every
 bound row, which keeps the KKT factorisation cheap. :class:`SubproblemAssembler`
 maps block values straight into the CSC ``data`` arrays, so each iteration only
@@ -66,23 +67,35 @@ class _Pattern:
 
 
 class SubproblemAssembler:
-    """Builds the trust-region subproblem for one program's block sizes."""
+    """Builds the trust-region subproblem for one program's block structure.
 
-    def __init__(self, n: int, num_residuals: int, linear: LinearConstraints, outputs: OutputConstraints,
-                 n_ineq: int, n_eq: int, scale: np.ndarray, linear_cost: np.ndarray,
-                 weights: np.ndarray) -> None:
-        self.n, self.m = n, num_residuals
+    The structure (sizes, and the sparsity of every Jacobian block) is read from the
+    first :class:`Evaluation`: a block whose Jacobian is a dense array gets a dense
+    pattern; one given as ``scipy.sparse.coo_matrix`` keeps its pattern, and every later
+    evaluation must list the same ``(row, col)`` entries in the same order. With
+    ``curvature`` the Hessian gets a diagonal block on ``d`` (the Lagrangian curvature the
+    program supplies, see :class:`~convexguid.scp.problem.NonconvexProgram`).
+    """
+
+    def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
+                 scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray, curvature: bool = False) -> None:
+        self.n, self.m = n, first.residuals.size
         self.linear, self.outputs, self.scale = linear, outputs, scale
         self.linear_cost, self.weights = linear_cost, weights
+        self.n_ineq = sum(b.values.size for b in first.inequalities)
+        self.n_eq = sum(b.values.size for b in first.equalities)
         n_a, n_g, n_o = linear.A.shape[0], linear.G.shape[0], outputs.M.shape[0]
-        self.n_slack = n_o + n_ineq + n_eq
+        self.n_slack = n_o + self.n_ineq + self.n_eq
         self.num_z = n + self.m + self.n_slack
-        y0, so0, sg0, t0 = n, n + self.m, n + self.m + n_o, n + self.m + n_o + n_ineq
-        self.cones = Cones(zero=n_a + self.m, nonneg=n_g + n_o + n_ineq + 2 * n_eq + self.n_slack + 2 * n)
+        y0, so0, sg0, t0 = n, n + self.m, n + self.m + n_o, n + self.m + n_o + self.n_ineq
+        self.cones = Cones(zero=n_a + self.m, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n)
+        #: first row of the +eq and -eq blocks (their multipliers give the equality duals)
+        eq_start = self.cones.zero + n_g + n_o + self.n_ineq
+        self.eq_rows = (eq_start, eq_start + self.n_eq)
         pat = _Pattern((self.cones.rows, self.num_z))
         # zero cone: A d = b - A x ; J d - y = -r
         pat.add_dense(0, 0, n_a, n)
-        pat.add_dense(n_a, 0, self.m, n)
+        _add_jacobian(pat, n_a, first.residual_jacobian, self.m, n)
         pat.add_diagonal(n_a, y0, self.m)
         row = n_a + self.m
         # nonnegative cone, in order: G, M y - s_o, lin. ineq, +eq, -eq, -slacks, trust region
@@ -91,13 +104,15 @@ class SubproblemAssembler:
         pat.add_sparse(row, y0, outputs.M)
         pat.add_diagonal(row, so0, n_o)
         row += n_o
-        pat.add_dense(row, 0, n_ineq, n)
-        pat.add_diagonal(row, sg0, n_ineq)
-        row += n_ineq
+        for block in first.inequalities:
+            _add_jacobian(pat, row, block.jacobian, block.values.size, n)
+            row += block.values.size
+        pat.add_diagonal(row - self.n_ineq, sg0, self.n_ineq)
         for _ in range(2):
-            pat.add_dense(row, 0, n_eq, n)
-            pat.add_diagonal(row, t0, n_eq)
-            row += n_eq
+            for block in first.equalities:
+                _add_jacobian(pat, row, block.jacobian, block.values.size, n)
+                row += block.values.size
+            pat.add_diagonal(row - self.n_eq, t0, self.n_eq)
         pat.add_diagonal(row, so0, self.n_slack)
         row += self.n_slack
         pat.add_diagonal(row, 0, n)
@@ -105,32 +120,67 @@ class SubproblemAssembler:
         pat.finish()
         self._a_pattern = pat
         self._m_data = sp.coo_matrix(outputs.M).data
+        self.curvature = curvature
         diag = np.arange(n, n + self.m)
-        self.P = sp.csc_matrix((2.0 * weights, (diag, diag)), shape=(self.num_z, self.num_z))
+        if curvature:
+            diag = np.concatenate([np.arange(n), diag])
+        self._p_rows = diag
+        self._p_residual = 2.0 * weights
         self.q = np.concatenate([linear_cost, np.zeros(self.m), np.zeros(self.n_slack)])
+        # the subproblem is solved for the scaled step d / scale, which keeps it well conditioned
+        self._column_scale = np.concatenate([scale, np.ones(self.m + self.n_slack)])
+        self._a_data_scale = self._column_scale[np.repeat(np.arange(self.num_z), np.diff(pat.indptr))]
 
-    def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians)."""
+    def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
+              hessian_diagonal: np.ndarray | None = None) -> ConicProgram:
+        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian_diagonal`` >= 0 if curvature)."""
         n, lin = self.n, self.linear
-        jac_g, g = _stack(ev.inequalities, n)
-        jac_e, e = _stack(ev.equalities, n)
-        n_o, n_ineq, n_eq = self.outputs.M.shape[0], g.size, e.size
-        a_blocks = [lin.A, ev.residual_jacobian, -np.ones(self.m), lin.G,
-                    self._m_data, -np.ones(n_o), jac_g, -np.ones(n_ineq),
-                    jac_e, -np.ones(n_eq), -jac_e, -np.ones(n_eq),
+        g = _values(ev.inequalities)
+        e = _values(ev.equalities)
+        n_o = self.outputs.M.shape[0]
+        jac_g = [_jacobian_data(b.jacobian) for b in ev.inequalities]
+        jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
+        neg_e = [-j for j in jac_e]
+        a_blocks = [lin.A, _jacobian_data(ev.residual_jacobian), -np.ones(self.m), lin.G,
+                    self._m_data, -np.ones(n_o), *jac_g, -np.ones(self.n_ineq),
+                    *jac_e, -np.ones(self.n_eq), *neg_e, -np.ones(self.n_eq),
                     -np.ones(self.n_slack), 1.0 / self.scale, -1.0 / self.scale]
         A = self._a_pattern.matrix(a_blocks)
+        A.data *= self._a_data_scale
         b = np.concatenate([lin.b - lin.A @ x, -ev.residuals, lin.h - lin.G @ x, self.outputs.m,
                             -g, -e, e, np.zeros(self.n_slack), np.full(2 * n, radius)])
+        p_data = self._p_residual
+        if self.curvature:
+            h = np.zeros(n) if hessian_diagonal is None else hessian_diagonal
+            p_data = np.concatenate([h, p_data])
+        p_data = p_data * self._column_scale[self._p_rows] ** 2
+        P = sp.csc_matrix((p_data, (self._p_rows, self._p_rows)), shape=(self.num_z, self.num_z))
         q = self.q.copy()
         q[n + self.m:] = penalty
-        return ConicProgram(self.P, q, A, b, self.cones)
+        q *= self._column_scale
+        return ConicProgram(P, q, A, b, self.cones)
+
+    def equality_multipliers(self, z: np.ndarray) -> np.ndarray:
+        """Multipliers :math:`\\lambda` of the linearized equalities (``e + \\nabla e\\, d = 0``) from row duals."""
+        plus, minus = self.eq_rows
+        return z[plus: plus + self.n_eq] - z[minus: minus + self.n_eq]
 
     def step(self, z: np.ndarray) -> np.ndarray:
-        return z[: self.n]
+        """The step ``d`` from a subproblem solution (whose first block is ``d`` in scaled units)."""
+        return z[: self.n] * self.scale
 
 
-def _stack(blocks: tuple[ConstraintBlock, ...], n: int) -> tuple[np.ndarray, np.ndarray]:
-    if not blocks:
-        return np.zeros((0, n)), np.zeros(0)
-    return np.vstack([b.jacobian for b in blocks]), np.concatenate([b.values for b in blocks])
+def _add_jacobian(pat: _Pattern, row0: int, jacobian: np.ndarray | sp.spmatrix | None, rows: int, n: int) -> None:
+    if sp.issparse(jacobian):
+        pat.add_sparse(row0, 0, jacobian)
+    else:
+        pat.add_dense(row0, 0, rows, n)
+
+
+def _jacobian_data(jacobian: np.ndarray | sp.spmatrix) -> np.ndarray:
+    """Values in pattern order: row-major for dense blocks, COO order for sparse ones."""
+    return jacobian.data if sp.issparse(jacobian) else np.asarray(jacobian)
+
+
+def _values(blocks: tuple[ConstraintBlock, ...]) -> np.ndarray:
+    return np.concatenate([b.values for b in blocks]) if blocks else np.zeros(0)

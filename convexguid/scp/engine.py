@@ -11,7 +11,12 @@ exact-penalty merit function
     \\phi(x) = f(x) + \\rho \\Big( \\sum \\max(0, g(x)) + \\sum |e(x)| \\Big).
 
 The objective's residuals are linearized (Gauss-Newton), so the subproblem is a
-convex QP whose fixed point is a KKT point of the nonlinear program. The trust
+convex QP whose fixed point is a KKT point of the nonlinear program. A program may
+also supply the curvature of its equality constraints, a nonnegative diagonal
+:math:`H \\approx \\sum_i \\lambda_i \\nabla^2 e_i(x)` evaluated with the multipliers of the
+previous subproblem (``lagrangian_curvature``); it enters the model as
+:math:`\\tfrac12 d^T H d`, an S\\ :math:`\\ell_1`\\ QP step (Fletcher 1985). Without it a purely
+linear objective gives linear programs, which crawl when the optimum is not a vertex. The trust
 radius shrinks on poor agreement and grows when the model is trusted and the step
 reaches the radius (the classical rule, e.g. Nocedal & Wright, Alg. 4.1).
 
@@ -30,6 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+import scipy.linalg
 
 from convexguid.backends import make_backend
 from convexguid.scp.assembly import SubproblemAssembler
@@ -121,10 +127,10 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
     t = time.perf_counter()
     raw, ev = evaluate(x, jacobians=True)
     convexify += time.perf_counter() - t
-    assembler = SubproblemAssembler(program.num_variables, raw.residuals.size, program.linear_constraints(),
-                                    outputs, sum(b.values.size for b in raw.inequalities),
-                                    sum(b.values.size for b in raw.equalities),
-                                    program.variable_scale(), cost, weights)
+    curvature = getattr(program, "lagrangian_curvature", None)
+    assembler = SubproblemAssembler(program.num_variables, raw, program.linear_constraints(), outputs,
+                                    program.variable_scale(), cost, weights, curvature=curvature is not None)
+    multipliers: dict[str, np.ndarray] = {}
     radius, rho = settings.trust_region, settings.penalty
     merit = merit_at(x, ev)
     backend = None
@@ -132,7 +138,10 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
     status, message = "max_iterations", f"no convergence in {settings.max_iterations} iterations"
 
     for it in range(1, settings.max_iterations + 1):
-        program_k = assembler.build(x, raw, radius, rho)
+        hessian = None
+        if curvature is not None and multipliers:
+            hessian = np.maximum(curvature(x, multipliers), 0.0)
+        program_k = assembler.build(x, raw, radius, rho, hessian)
         if backend is None:
             backend = make_backend(settings.backend, program_k, settings.backend_tolerance)
         else:
@@ -146,14 +155,27 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
                 status, message = "solver_error", f"backend {settings.backend} returned {res.status}"
             break
         d = assembler.step(res.x)
+        if curvature is not None and res.z is not None:
+            multipliers = _split_by_block(assembler.equality_multipliers(res.z), raw)
         predicted = merit - (program_k.objective(res.x) + cost @ x)
         t = time.perf_counter()
         x_new = x + d
         _, ev_new = evaluate(x_new, jacobians=False)
         merit_new = merit_at(x_new, ev_new)
         convexify += time.perf_counter() - t
-        actual = merit - merit_new
-        ratio = actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
+        ratio = _ratio(merit - merit_new, predicted)
+        if ratio < settings.expand_ratio and raw.equalities:
+            # Second-order correction: the linear model cannot see the curvature of the
+            # equalities, so a good step can look bad (Maratos effect); pull x_new back
+            # onto e = 0 along the minimum-norm direction and judge the corrected point.
+            t = time.perf_counter()
+            x_soc = x_new + _second_order_correction(program, raw, ev_new)
+            _, ev_soc = evaluate(x_soc, jacobians=False)
+            merit_soc = merit_at(x_soc, ev_soc)
+            convexify += time.perf_counter() - t
+            if _ratio(merit - merit_soc, predicted) > ratio:
+                x_new, ev_new, merit_new = x_soc, ev_soc, merit_soc
+                ratio = _ratio(merit - merit_new, predicted)
         step = float(np.max(np.abs(d) / program.variable_scale()))
         accepted = ratio >= settings.accept_ratio
         if accepted:
@@ -188,11 +210,40 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
             message = "iterates stalled with constraints violated: " + _describe_violations(ev)
             break
 
+    if status == "max_iterations" and _max_violation(ev) > settings.feasibility_tolerance:
+        message += "; constraints still violated: " + _describe_violations(ev)
     return SCPResult(x=x, status=status, objective=objective_value(ev, weights, cost, x),
                      max_violation=_max_violation(ev), violations=violation_by_block(ev),
                      iterations=len(history), history=history, message=message,
                      wall_time_s=time.perf_counter() - start, convexify_time_s=convexify,
                      solver_time_s=solver_time)
+
+
+def _ratio(actual: float, predicted: float) -> float:
+    """Actual over predicted decrease of the merit function."""
+    return actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
+
+
+def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_trial: Evaluation) -> np.ndarray:
+    """Least-norm (in scaled units) ``c`` with :math:`\\nabla e(x)\\,c = -e(x + d)` and :math:`A c = 0`.
+
+    Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 15.6 (second-order correction).
+    """
+    scale = program.variable_scale()
+    jac = np.vstack([b.jacobian.toarray() if hasattr(b.jacobian, "toarray") else b.jacobian
+                     for b in at_x.equalities] + [program.linear_constraints().A])
+    rhs = np.concatenate([-b.values for b in at_trial.equalities] + [np.zeros(program.linear_constraints().A.shape[0])])
+    scaled, *_ = scipy.linalg.lstsq(jac * scale, rhs, lapack_driver="gelsy")
+    return scaled * scale
+
+
+def _split_by_block(values: np.ndarray, ev: Evaluation) -> dict[str, np.ndarray]:
+    """Equality multipliers by block name."""
+    out, start = {}, 0
+    for block in ev.equalities:
+        out[block.name] = values[start: start + block.values.size]
+        start += block.values.size
+    return out
 
 
 def _max_violation(ev: Evaluation) -> float:

@@ -21,12 +21,14 @@ from pydantic_core import ErrorDetails
 from convexguid.errors import SpecError
 from convexguid.spec.common import SPEC_ERROR_TYPE, ProblemBase
 from convexguid.spec.flat_attitude import FlatAttitudeProblem
+from convexguid.spec.rendezvous import RendezvousProblem
 
 ProblemSpec = ProblemBase
 """Type of every validated problem (each family subclasses it)."""
 
 FAMILY_MODELS: dict[str, type[ProblemBase]] = {
     "flat_attitude": FlatAttitudeProblem,
+    "rendezvous": RendezvousProblem,
 }
 """Model class of each problem family, by the value of the ``family`` key."""
 

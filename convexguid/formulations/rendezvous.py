@@ -1,0 +1,309 @@
+"""Finite-thrust minimum-burn-time rendezvous (Wang & Tang 2003): problem data, thrust plans, verification.
+
+Find the thrust direction history :math:`u(t)` (engine on at constant acceleration
+:math:`a` with :math:`|u| = 1`, or off) that takes the chaser from :math:`X_0` to
+:math:`X_f` in Clohessy-Wiltshire dynamics (:mod:`convexguid.dynamics.clohessy_wiltshire`)
+in the fixed time :math:`t_f - t_0` with the least total burn time. Two methods:
+
+* ``scp_arcs`` (:mod:`convexguid.formulations.rendezvous_arcs`): the paper's burn/coast
+  transcription, a nonconvex program solved by SCP;
+* ``lcvx`` (:mod:`convexguid.formulations.rendezvous_lcvx`): lossless convexification on a
+  fixed zero-order-hold grid, one SOCP whose optimum is global for that grid.
+
+``scp_arcs`` is certified by ``lcvx``: both are solved and the gap reported.
+Every plan is verified by integrating :math:`\\dot X = AX + B\\,a u(t)` with SciPy.
+
+References
+----------
+Wang H., Tang G., "Optimal finite thrust rendezvous using nonlinear programming",
+J. National Univ. of Defense Technology 25(5), 2003.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from convexguid.dynamics.clohessy_wiltshire import cw_matrices
+from convexguid.errors import SolverError
+from convexguid.scp.engine import IterationRecord, solve_scp
+from convexguid.scp.problem import SCPSettings
+from convexguid.solution import Solution, Trajectory
+from convexguid.verify import ConstraintCheck, Verification
+
+
+@dataclass(frozen=True)
+class Rendezvous:
+    """A rendezvous case in SI units; ``dim`` = 2 (coplanar ``[x, y, vx, vy]``) or 3."""
+
+    name: str
+    mean_motion: float
+    accel: float
+    t0: float
+    tf: float
+    x0: np.ndarray
+    xf: np.ndarray
+
+    @property
+    def dim(self) -> int:
+        return self.x0.size // 2
+
+    @property
+    def nx(self) -> int:
+        return self.x0.size
+
+    @property
+    def nu(self) -> int:
+        return self.dim
+
+    @property
+    def duration(self) -> float:
+        return self.tf - self.t0
+
+    def matrices(self) -> tuple[np.ndarray, np.ndarray]:
+        """``A, B`` of eq. (2), ``B`` including the thrust acceleration."""
+        return cw_matrices(self.mean_motion, self.accel, self.dim)
+
+
+def build_case(spec) -> Rendezvous:
+    """SI arrays from a validated ``rendezvous`` spec (:mod:`convexguid.spec.rendezvous`)."""
+    b = spec.boundary
+    return Rendezvous(spec.name, spec.orbit.mean_motion_radps, spec.spacecraft.accel_mps2, b.t0_s, b.tf_s,
+                      np.array(b.initial.state), np.array(b.final.state))
+
+
+@dataclass(frozen=True)
+class BurnArc:
+    """One burn, from ``start_s`` to ``end_s``."""
+
+    start_s: float
+    end_s: float
+
+    @property
+    def duration_s(self) -> float:
+        return self.end_s - self.start_s
+
+
+@dataclass(frozen=True)
+class ThrustSegment:
+    """Thrust on ``[start, end]`` with a direction/throttle ``u(t)`` smooth inside it (``|u| <= 1``)."""
+
+    start: float
+    end: float
+    command: Callable[[float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class ThrustPlan:
+    """Planned :math:`u(t)`: the listed segments (sorted, disjoint), zero thrust elsewhere."""
+
+    segments: tuple[ThrustSegment, ...]
+    nu: int
+
+    def __call__(self, t: float) -> np.ndarray:
+        for seg in self.segments:
+            if seg.start <= t <= seg.end:
+                return seg.command(t)
+        return np.zeros(self.nu)
+
+    @classmethod
+    def from_nodes(cls, times: np.ndarray, directions: np.ndarray, burns: tuple[BurnArc, ...],
+                   normalize: bool) -> ThrustPlan:
+        """Linear interpolation of node directions inside each burn (one segment per node interval)."""
+        segments = []
+        for k in range(times.size - 1):
+            t_a, t_b = times[k], times[k + 1]
+            inside = any(b.start_s - 1e-9 <= t_a and t_b <= b.end_s + 1e-9 for b in burns)
+            if not inside or t_b <= t_a:
+                continue
+            segments.append(ThrustSegment(float(t_a), float(t_b),
+                                          _linear_command(t_a, t_b, directions[k], directions[k + 1], normalize)))
+        return cls(tuple(segments), directions.shape[1])
+
+    @classmethod
+    def from_steps(cls, grid: np.ndarray, controls: np.ndarray, threshold: float = 0.0) -> ThrustPlan:
+        """Piecewise-constant ``controls[k]`` on ``[grid[k], grid[k+1]]`` (zero-order hold)."""
+        segments = tuple(ThrustSegment(float(grid[k]), float(grid[k + 1]), _constant_command(controls[k]))
+                         for k in range(controls.shape[0]) if np.linalg.norm(controls[k]) > threshold)
+        return cls(segments, controls.shape[1])
+
+
+def _linear_command(t_a: float, t_b: float, u_a: np.ndarray, u_b: np.ndarray,
+                    normalize: bool) -> Callable[[float], np.ndarray]:
+    def command(t: float) -> np.ndarray:
+        s = (t - t_a) / (t_b - t_a)
+        u = (1 - s) * u_a + s * u_b
+        return u / np.linalg.norm(u) if normalize else u
+
+    return command
+
+
+def _constant_command(u: np.ndarray) -> Callable[[float], np.ndarray]:
+    u = np.array(u, dtype=float)
+    return lambda t: u
+
+
+@dataclass(frozen=True)
+class RendezvousTrack:
+    """Propagated history on the dense grid: times, states, planned ``u``."""
+
+    t: np.ndarray
+    states: np.ndarray
+    u: np.ndarray
+
+
+def propagate_thrust(case: Rendezvous, plan: ThrustPlan, grid_points: int, rtol: float,
+                     atol: float) -> RendezvousTrack:
+    """Integrate :math:`\\dot X = AX + B u(t)` (DOP853) piece by piece between the plan's switch times.
+
+    Every thrust segment and every coast between them is integrated separately, so the
+    integrator never steps across a discontinuity of :math:`u`. The dense grid is the
+    union of ``grid_points`` equally spaced times and the segment ends.
+    """
+    A, B = case.matrices()
+    cuts = np.unique(np.concatenate([[case.t0, case.tf], [s.start for s in plan.segments],
+                                     [s.end for s in plan.segments]]))
+    cuts = cuts[(cuts >= case.t0) & (cuts <= case.tf)]
+    grid = np.unique(np.concatenate([np.linspace(case.t0, case.tf, grid_points), cuts]))
+    states = np.empty((grid.size, case.nx))
+    states[0] = case.x0
+    x = case.x0.copy()
+    for t_a, t_b in zip(cuts[:-1], cuts[1:], strict=True):
+        mid = 0.5 * (t_a + t_b)
+        seg = next((s for s in plan.segments if s.start <= mid <= s.end), None)
+        command = seg.command if seg is not None else (lambda t: np.zeros(case.nu))
+        sol = solve_ivp(lambda t, y, c=command: A @ y + B @ c(t), (t_a, t_b), x, method="DOP853",
+                        rtol=rtol, atol=atol, dense_output=True)
+        if not sol.success:
+            raise SolverError(f"dense propagation failed on [{t_a:.6g}, {t_b:.6g}] s: {sol.message}")
+        inside = (grid > t_a) & (grid <= t_b)
+        states[inside] = sol.sol(grid[inside]).T
+        x = sol.y[:, -1]
+    # u on the grid, taken from the segment that ends at or contains each time (right-continuous at cuts)
+    u = np.array([plan(t) for t in grid])
+    return RendezvousTrack(grid, states, u)
+
+
+def verify_track(case: Rendezvous, track: RendezvousTrack, settings) -> Verification:
+    """Thrust bound :math:`|a u| \\le a` on the dense grid, and the final position and velocity errors."""
+    d = case.dim
+    accel = case.accel * np.linalg.norm(track.u, axis=1)
+    checks = (ConstraintCheck("thrust_accel_mps2", float(accel.max()), case.accel, "max"),)
+    err = track.states[-1] - case.xf
+    pos_err, vel_err = float(np.linalg.norm(err[:d])), float(np.linalg.norm(err[d:]))
+    path_ok = all(c.violation <= settings.thrust_tol * c.bound for c in checks)
+    passed = path_ok and pos_err <= settings.final_position_tol_m and vel_err <= settings.final_velocity_tol_mps
+    return Verification(
+        grid_points=int(track.t.size), checks=checks, final_state_error=float(np.linalg.norm(err)),
+        final_errors={"final_position_error_m": pos_err, "final_velocity_error_mps": vel_err}, passed=passed,
+        tolerances={"thrust_rel": settings.thrust_tol, "position_m": settings.final_position_tol_m,
+                    "velocity_mps": settings.final_velocity_tol_mps})
+
+
+AXES = ("x", "y", "z")
+
+
+def state_columns(dim: int, states: np.ndarray, u: np.ndarray, accel: float) -> dict[str, np.ndarray]:
+    """CSV columns of states and thrust, units in the headers."""
+    cols = {f"{AXES[i]}_m": states[:, i] for i in range(dim)}
+    cols.update({f"v{AXES[i]}_mps": states[:, dim + i] for i in range(dim)})
+    cols.update({f"u{AXES[i]}": u[:, i] for i in range(dim)})
+    cols["thrust_accel_mps2"] = accel * np.linalg.norm(u, axis=1)
+    return cols
+
+
+def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
+    """Plan with ``spec.method``, verify by propagation, and (``scp_arcs``) certify against ``lcvx``."""
+    from convexguid.formulations.rendezvous_lcvx import solve_lcvx
+
+    start = time.perf_counter()
+    case = build_case(spec)
+    disc = spec.discretization
+    lcvx = solve_lcvx(case, disc.grid_steps, spec.solver.backend) if (
+        spec.method == "lcvx" or spec.certify) else None
+    if spec.method == "lcvx":
+        plan = lcvx
+    elif lcvx is not None and lcvx.status == "infeasible":
+        # the convex relaxation admits every thrust history the arcs could fly: no need to search
+        plan = replace(lcvx, message=f"certified by lcvx on {disc.grid_steps} steps: {lcvx.message}",
+                       size=_arcs_program(case, spec).size(), iterations=0)
+    else:
+        plan = _solve_arcs(case, spec, log)
+    track = propagate_thrust(case, plan.thrust, spec.verification.grid_points, spec.verification.rtol,
+                             spec.verification.atol)
+    verification = verify_track(case, track, spec.verification) if plan.status == "converged" else None
+    extras = {"burn_time_s": plan.objective if plan.status == "converged" else None,
+              "num_burns": len(plan.burns),
+              "burn_arcs_s": [[b.start_s, b.end_s] for b in plan.burns],
+              "accel_mps2": case.accel, "mean_motion_radps": case.mean_motion}
+    extras.update(plan.extras)
+    if spec.method == "scp_arcs" and lcvx is not None:
+        extras.update(_certificate(plan, lcvx))
+    return Solution(
+        problem=spec.name, family=spec.family, method=spec.method, status=plan.status,
+        objective=plan.objective, iterations=plan.iterations, size=plan.size,
+        wall_time_s=time.perf_counter() - start, solver=spec.solver.backend, message=plan.message,
+        verification=verification, history=plan.history, nodes=plan.nodes,
+        dense=Trajectory(track.t, state_columns(case.dim, track.states, track.u, case.accel)),
+        extras=extras, timing=plan.timing)
+
+
+@dataclass
+class RendezvousPlan:
+    """What either method hands back before verification."""
+
+    status: str
+    message: str
+    objective: float
+    iterations: int
+    size: object
+    burns: tuple[BurnArc, ...]
+    thrust: ThrustPlan
+    nodes: Trajectory
+    timing: dict[str, float]
+    extras: dict
+    history: list[IterationRecord]
+
+
+def _arcs_program(case: Rendezvous, spec):
+    from convexguid.formulations.rendezvous_arcs import ArcsProgram
+
+    return ArcsProgram(case, spec.discretization.burns, spec.discretization.subintervals_per_burn)
+
+
+def _solve_arcs(case: Rendezvous, spec, log) -> RendezvousPlan:
+    s = spec.solver
+    program = _arcs_program(case, spec)
+    settings = SCPSettings(backend=s.backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
+                           trust_region=s.trust_region, penalty=s.penalty)
+    result = solve_scp(program, settings, log)
+    states, dirs, durations = program.layout.split(result.x)
+    times = program.node_times(durations)
+    nodes = Trajectory(times, state_columns(case.dim, states, dirs, case.accel))
+    extras = {"arc_durations_s": durations.tolist(),
+              "planned_direction_norm_min": _interpolated_norm_min(times, dirs, program.burn_arcs(result.x))}
+    return RendezvousPlan(result.status, result.message, result.objective, result.iterations, program.size(),
+                          program.burn_arcs(result.x), program.thrust_plan(result.x), nodes,
+                          {"scp_s": result.wall_time_s, "convexify_s": result.convexify_time_s,
+                           "solver_s": result.solver_time_s, "overhead_s": result.overhead_time_s},
+                          extras, result.history)
+
+
+def _interpolated_norm_min(times: np.ndarray, dirs: np.ndarray, burns: tuple[BurnArc, ...]) -> float:
+    """Smallest norm of the linearly interpolated direction on the burns (1 at the nodes)."""
+    plan = ThrustPlan.from_nodes(times, dirs, burns, normalize=False)
+    samples = [seg.command(t) for seg in plan.segments for t in np.linspace(seg.start, seg.end, 21)]
+    return float(min((np.linalg.norm(u) for u in samples), default=1.0))
+
+
+def _certificate(arcs: RendezvousPlan, lcvx: RendezvousPlan) -> dict:
+    """Gap of the ``scp_arcs`` burn time to the ``lcvx`` global optimum on the fixed grid."""
+    if lcvx.status != "converged" or arcs.status != "converged":
+        return {"lcvx_status": lcvx.status, "lcvx_burn_time_s": None, "lcvx_gap_rel": None}
+    return {"lcvx_status": lcvx.status, "lcvx_burn_time_s": lcvx.objective,
+            "lcvx_gap_rel": (arcs.objective - lcvx.objective) / lcvx.objective,
+            "lcvx_burn_arcs_s": [[b.start_s, b.end_s] for b in lcvx.burns]}

@@ -1,0 +1,354 @@
+"""Method ``scp_arcs``: Wang & Tang's burn/coast transcription, solved by sequential convex programming.
+
+The maneuver is split into arcs burn - coast - burn - ... (``burns`` burn arcs); each
+burn into ``S`` equal sub-intervals. The design vector (eq. 4) holds the state and
+the thrust direction at every node and the arc durations:
+
+.. math::
+
+    D = [X_1^T, U_1^T, \\dots, X_n^T, U_n^T, T_1, \\dots, T_{2b-1}]^T,
+    \\qquad n = b (S + 1).
+
+Constraints: Hermite-Simpson defects on every burn sub-interval of length
+:math:`h = T_{burn}/S` (eqs. 5-8, :mod:`convexguid.transcription.hermite_simpson`),
+the coast map :math:`\\Phi(T_{coast}) X_{end} - X_{start} = 0` (eq. 9, closed-form STM),
+:math:`|U_k|^2 = 1` at every node, the boundary states, :math:`\\sum T_i = t_f - t_0` and
+:math:`T_i \\ge 0`. Objective: the total burn time :math:`\\sum T_{burn}` (eq. 10), linear.
+
+The nonconvex parts (the unit thrust direction, the durations multiplying the
+dynamics, the STM of an unknown coast duration) are linearized about the previous
+iterate by the SCP engine; the subproblem is a linear program in a trust region.
+The paper instead solves the NLP with an exterior penalty (eq. 12).
+
+References
+----------
+Wang H., Tang G., "Optimal finite thrust rendezvous using nonlinear programming",
+J. National Univ. of Defense Technology 25(5), 2003, eqs. (4)-(11).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+
+from convexguid.dynamics.clohessy_wiltshire import cw_stm, cw_stm_derivative
+from convexguid.formulations.rendezvous import BurnArc, Rendezvous, ThrustPlan
+from convexguid.scp.problem import (
+    ConstraintBlock,
+    Evaluation,
+    LinearConstraints,
+    OutputConstraints,
+    ProgramSize,
+)
+from convexguid.transcription.hermite_simpson import hermite_simpson_defects, hermite_simpson_midpoint
+
+
+@dataclass(frozen=True)
+class ArcLayout:
+    """Where each node and duration lives in the design vector (``burns`` burns, ``S`` sub-intervals each)."""
+
+    nx: int
+    nu: int
+    burns: int
+    subintervals: int
+
+    @property
+    def nodes_per_burn(self) -> int:
+        return self.subintervals + 1
+
+    @property
+    def num_nodes(self) -> int:
+        return self.burns * self.nodes_per_burn
+
+    @property
+    def num_arcs(self) -> int:
+        return 2 * self.burns - 1
+
+    @property
+    def node_size(self) -> int:
+        return self.nx + self.nu
+
+    @property
+    def num_variables(self) -> int:
+        return self.num_nodes * self.node_size + self.num_arcs
+
+    @property
+    def duration_offset(self) -> int:
+        return self.num_nodes * self.node_size
+
+    def split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """States ``(n, nx)``, directions ``(n, nu)`` and arc durations from the design vector."""
+        nodes = x[: self.duration_offset].reshape(self.num_nodes, self.node_size)
+        return nodes[:, : self.nx], nodes[:, self.nx:], x[self.duration_offset:]
+
+    def join(self, states: np.ndarray, directions: np.ndarray, durations: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.hstack([states, directions]).ravel(), durations])
+
+    def state_index(self, node: int) -> np.ndarray:
+        return node * self.node_size + np.arange(self.nx)
+
+    def direction_index(self, node: int) -> np.ndarray:
+        return node * self.node_size + self.nx + np.arange(self.nu)
+
+    def burn_nodes(self, burn: int) -> np.ndarray:
+        return burn * self.nodes_per_burn + np.arange(self.nodes_per_burn)
+
+    @staticmethod
+    def burn_arc(burn: int) -> int:
+        return 2 * burn
+
+    @staticmethod
+    def coast_arc(coast: int) -> int:
+        return 2 * coast + 1
+
+
+class ArcsProgram:
+    """:class:`convexguid.scp.problem.NonconvexProgram` of the burn/coast transcription."""
+
+    def __init__(self, case: Rendezvous, burns: int, subintervals: int) -> None:
+        self.case = case
+        self.layout = ArcLayout(case.nx, case.nu, burns, subintervals)
+        self.num_variables = self.layout.num_variables
+        self._A, self._B = case.matrices()
+
+    # --- dynamics f(x, u) = A x + B u on stacked rows -------------------------------------------
+    def _f(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        return x @ self._A.T + u @ self._B.T
+
+    def _jac(self, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        k = x.shape[0]
+        return np.broadcast_to(self._A, (k, *self._A.shape)), np.broadcast_to(self._B, (k, *self._B.shape))
+
+    # --- NonconvexProgram -----------------------------------------------------------------------
+    def size(self) -> ProgramSize:
+        """The paper's counts: defects, coast maps, unit directions, boundary states, total time; T >= 0."""
+        lay = self.layout
+        nonlinear = lay.burns * lay.subintervals * lay.nx + (lay.burns - 1) * lay.nx + lay.num_nodes
+        lin = self.linear_constraints()
+        return ProgramSize(self.num_variables, nonlinear + lin.A.shape[0], lin.G.shape[0])
+
+    def initial_guess(self) -> np.ndarray:
+        """The paper's kind of guess, from the boundary conditions only.
+
+        Equal arc durations; states interpolated linearly in time between the boundary
+        states; every direction along the velocity change :math:`v_f - v_0`.
+        """
+        case, lay = self.case, self.layout
+        durations = np.full(lay.num_arcs, case.duration / lay.num_arcs)
+        times = self.node_times(durations)
+        s = ((times - case.t0) / case.duration)[:, None]
+        states = (1 - s) * case.x0 + s * case.xf
+        dv = case.xf[case.nu:] - case.x0[case.nu:]
+        direction = dv / np.linalg.norm(dv) if np.linalg.norm(dv) > 0 else np.eye(case.nu)[0]
+        return lay.join(states, np.tile(direction, (lay.num_nodes, 1)), durations)
+
+    def variable_scale(self) -> np.ndarray:
+        """Position, velocity, direction and duration scales (the trust region is a box in these units)."""
+        case, lay = self.case, self.layout
+        d = case.nu
+        pos = max(np.abs(case.x0[:d]).max(), np.abs(case.xf[:d]).max(), 1.0)
+        vel = max(np.abs(case.x0[d:]).max(), np.abs(case.xf[d:]).max(), case.accel * case.duration / 10)
+        node = np.concatenate([np.full(d, pos), np.full(d, vel), np.ones(lay.nu)])
+        return np.concatenate([np.tile(node, lay.num_nodes), np.full(lay.num_arcs, case.duration)])
+
+    def residual_weights(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def linear_cost(self) -> np.ndarray:
+        """Total burn time, eq. (10)."""
+        c = np.zeros(self.num_variables)
+        c[self.layout.duration_offset + 2 * np.arange(self.layout.burns)] = 1.0
+        return c
+
+    @cached_property
+    def _linear(self) -> LinearConstraints:
+        """Boundary states, :math:`\\sum T_i = t_f - t_0`, and :math:`-T_i \\le 0`."""
+        lay, n = self.layout, self.num_variables
+        A = np.zeros((2 * lay.nx + 1, n))
+        A[np.arange(lay.nx), lay.state_index(0)] = 1.0
+        A[lay.nx + np.arange(lay.nx), lay.state_index(lay.num_nodes - 1)] = 1.0
+        A[-1, lay.duration_offset:] = 1.0
+        b = np.concatenate([self.case.x0, self.case.xf, [self.case.duration]])
+        G = np.zeros((lay.num_arcs, n))
+        G[np.arange(lay.num_arcs), lay.duration_offset + np.arange(lay.num_arcs)] = -1.0
+        return LinearConstraints(A, b, G, np.zeros(lay.num_arcs))
+
+    def linear_constraints(self) -> LinearConstraints:
+        return self._linear
+
+    def output_constraints(self) -> OutputConstraints:
+        return OutputConstraints.none(0)
+
+    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
+        blocks = (self._burn_defects(x, jacobians), self._coast_defects(x, jacobians),
+                  self._unit_directions(x, jacobians))
+        blocks = tuple(self._scaled(b, jacobians) for b in blocks)
+        return Evaluation(np.zeros(0), np.zeros((0, self.num_variables)) if jacobians else None, (), blocks)
+
+    @cached_property
+    def _patterns(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Structural nonzeros ``(rows, cols)`` of each block's Jacobian (fixed, so the subproblem's is too)."""
+        lay = self.layout
+        nx, S = lay.nx, lay.subintervals
+
+        def node_cols(node: int) -> np.ndarray:
+            return node * lay.node_size + np.arange(lay.node_size)
+
+        def dense_block(rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            r, c = np.meshgrid(rows, cols, indexing="ij")
+            return r.ravel(), c.ravel()
+
+        burn, coast, unit = [], [], []
+        for b in range(lay.burns):
+            nodes = lay.burn_nodes(b)
+            for k in range(S):
+                cols = np.concatenate([node_cols(nodes[k]), node_cols(nodes[k + 1]),
+                                       [lay.duration_offset + lay.burn_arc(b)]])
+                burn.append(dense_block((b * S + k) * nx + np.arange(nx), cols))
+        for c in range(lay.burns - 1):
+            cols = np.concatenate([lay.state_index(lay.burn_nodes(c)[-1]), lay.state_index(lay.burn_nodes(c + 1)[0]),
+                                   [lay.duration_offset + lay.coast_arc(c)]])
+            coast.append(dense_block(c * nx + np.arange(nx), cols))
+        for k in range(lay.num_nodes):
+            unit.append(dense_block(np.array([k]), lay.direction_index(k)))
+
+        def join(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+            if not parts:
+                return np.zeros(0, int), np.zeros(0, int)
+            return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+
+        return {"burn_defects": join(burn), "coast_defects": join(coast), "unit_thrust_direction": join(unit)}
+
+    def _scaled(self, block: ConstraintBlock, jacobians: bool) -> ConstraintBlock:
+        """The block in nondimensional units (defects divided by the position/velocity scales), Jacobian sparse."""
+        scale = self._state_scale if block.name != "unit_thrust_direction" else np.ones(1)
+        per_row = np.resize(1.0 / scale, block.values.size)
+        jac = None
+        if jacobians:
+            rows, cols = self._patterns[block.name]
+            jac = sp.coo_matrix((block.jacobian[rows, cols] * per_row[rows], (rows, cols)),
+                                shape=block.jacobian.shape)
+        unit = "" if block.name == "unit_thrust_direction" else "scaled"
+        return ConstraintBlock(block.name, block.values * per_row, jac, unit)
+
+    @cached_property
+    def _state_scale(self) -> np.ndarray:
+        """Position and velocity scales of :meth:`variable_scale`, one per state component."""
+        return self.variable_scale()[: self.layout.nx]
+
+    def lagrangian_curvature(self, x: np.ndarray, multipliers: dict[str, np.ndarray]) -> np.ndarray:
+        """Diagonal curvature :math:`2\\lambda_k` of :math:`\\lambda_k(|U_k|^2 - 1)` on the direction entries.
+
+        This is the term that keeps the subproblem from gaining thrust by turning
+        :math:`U_k` along the tangent of the unit sphere (a linear model sees no cost in
+        it); the other constraints' curvature is left to the trust region.
+        """
+        lay = self.layout
+        h = np.zeros(self.num_variables)
+        lam = multipliers.get("unit_thrust_direction")
+        if lam is not None:
+            for k in range(lay.num_nodes):
+                h[lay.direction_index(k)] = 2.0 * lam[k]
+        return h
+
+    # --- constraint blocks -----------------------------------------------------------------------
+    def _burn_defects(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
+        """Hermite-Simpson defects of every burn sub-interval, eqs. (5)-(8)."""
+        lay = self.layout
+        states, dirs, durations = lay.split(x)
+        S, nx = lay.subintervals, lay.nx
+        values, rows = [], []
+        for burn in range(lay.burns):
+            nodes = lay.burn_nodes(burn)
+            h = np.full(S, durations[lay.burn_arc(burn)] / S)
+            hs = hermite_simpson_defects(self._f, self._jac, states[nodes[:-1]], dirs[nodes[:-1]],
+                                         states[nodes[1:]], dirs[nodes[1:]], h)
+            values.append(hs.values.ravel())
+            if not jacobians:
+                continue
+            jac = np.zeros((S * nx, self.num_variables))
+            for k in range(S):
+                r = slice(k * nx, (k + 1) * nx)
+                jac[r, lay.state_index(nodes[k])] = hs.d_x0[k]
+                jac[r, lay.direction_index(nodes[k])] = hs.d_u0[k]
+                jac[r, lay.state_index(nodes[k + 1])] = hs.d_x1[k]
+                jac[r, lay.direction_index(nodes[k + 1])] = hs.d_u1[k]
+                jac[r, lay.duration_offset + lay.burn_arc(burn)] = hs.d_h[k] / S
+            rows.append(jac)
+        return ConstraintBlock("burn_defects", np.concatenate(values), np.vstack(rows) if jacobians else None,
+                               "m, m/s")
+
+    def _coast_defects(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
+        """Coast arcs, eq. (9): :math:`\\Phi(T_c) X_{end} - X_{start}` with :math:`d\\Phi/dT = A\\Phi`."""
+        lay, n = self.layout, self.case.mean_motion
+        states, _, durations = lay.split(x)
+        values, rows = [], []
+        for coast in range(lay.burns - 1):
+            end, start = lay.burn_nodes(coast)[-1], lay.burn_nodes(coast + 1)[0]
+            tc = durations[lay.coast_arc(coast)]
+            phi = cw_stm(n, tc, self.case.dim)
+            values.append(phi @ states[end] - states[start])
+            if jacobians:
+                jac = np.zeros((lay.nx, self.num_variables))
+                jac[:, lay.state_index(end)] = phi
+                jac[:, lay.state_index(start)] = -np.eye(lay.nx)
+                dphi = cw_stm_derivative(n, tc, self.case.dim)
+                jac[:, lay.duration_offset + lay.coast_arc(coast)] = dphi @ states[end]
+                rows.append(jac)
+        empty = np.zeros((0, self.num_variables))
+        return ConstraintBlock("coast_defects", np.concatenate(values) if values else np.zeros(0),
+                               (np.vstack(rows) if rows else empty) if jacobians else None, "m, m/s")
+
+    def _unit_directions(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
+        """:math:`|U_k|^2 - 1 = 0` at every node."""
+        lay = self.layout
+        _, dirs, _ = lay.split(x)
+        jac = None
+        if jacobians:
+            jac = np.zeros((lay.num_nodes, self.num_variables))
+            for k in range(lay.num_nodes):
+                jac[k, lay.direction_index(k)] = 2 * dirs[k]
+        return ConstraintBlock("unit_thrust_direction", np.sum(dirs**2, axis=1) - 1.0, jac, "")
+
+    # --- reading a solution ----------------------------------------------------------------------
+    def node_times(self, durations: np.ndarray) -> np.ndarray:
+        """Time of every node: burn nodes equally spaced over their arc."""
+        lay, t0 = self.layout, self.case.t0
+        starts = t0 + np.concatenate([[0.0], np.cumsum(durations)[:-1]])
+        return np.concatenate([starts[lay.burn_arc(b)] + np.linspace(0.0, durations[lay.burn_arc(b)],
+                                                                       lay.nodes_per_burn)
+                               for b in range(lay.burns)])
+
+    def burn_arcs(self, x: np.ndarray) -> tuple[BurnArc, ...]:
+        lay = self.layout
+        _, _, durations = lay.split(x)
+        starts = self.case.t0 + np.concatenate([[0.0], np.cumsum(durations)[:-1]])
+        return tuple(BurnArc(float(starts[lay.burn_arc(b)]), float(starts[lay.burn_arc(b)]
+                                                                    + durations[lay.burn_arc(b)]))
+                     for b in range(lay.burns))
+
+    def thrust_plan(self, x: np.ndarray) -> ThrustPlan:
+        """The engine's command: full thrust along the interpolated, normalized node direction on burns.
+
+        The transcription interpolates the direction linearly (eq. 6), whose norm dips
+        slightly below 1 between nodes; a constant-thrust engine flies its unit vector,
+        which is what the verification propagates.
+        """
+        _, dirs, _ = self.layout.split(x)
+        times = self.node_times(self.layout.split(x)[2])
+        return ThrustPlan.from_nodes(times, dirs, self.burn_arcs(x), normalize=True)
+
+    def midpoints(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Hermite-Simpson midpoint states and directions of every burn sub-interval (for plots)."""
+        lay = self.layout
+        states, dirs, durations = lay.split(x)
+        mids = []
+        for burn in range(lay.burns):
+            nodes = lay.burn_nodes(burn)
+            h = np.full(lay.subintervals, durations[lay.burn_arc(burn)] / lay.subintervals)
+            mids.append(hermite_simpson_midpoint(self._f, states[nodes[:-1]], dirs[nodes[:-1]],
+                                                 states[nodes[1:]], dirs[nodes[1:]], h))
+        return np.vstack([m[0] for m in mids]), np.vstack([m[1] for m in mids])

@@ -1,0 +1,173 @@
+"""Problem family ``rendezvous``: finite-thrust minimum-burn-time rendezvous in Clohessy-Wiltshire dynamics.
+
+Positions and velocities are in the target's orbit frame of Wang & Tang (2003), Fig. 1:
+x opposite to the target's orbital velocity, y away from the Earth, z along the orbit
+normal. Two-component vectors give the coplanar problem ``[x, y]``; three components
+the full 3-D one.
+
+References
+----------
+Wang H., Tang G., "Optimal finite thrust rendezvous using nonlinear programming",
+J. National Univ. of Defense Technology 25(5), 2003.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, PlainValidator, model_validator
+
+from convexguid.spec.common import (
+    PositiveFloat,
+    ProblemBase,
+    Reference,
+    SolverSettings,
+    SpecModel,
+    readonly,
+    spec_error,
+)
+
+
+def _plane_or_space_vector(v: object) -> tuple[float, ...]:
+    """Two (coplanar) or three (3-D) finite numbers."""
+    hint = "give a list of 2 (coplanar x, y) or 3 (x, y, z) finite numbers"
+    if not isinstance(v, (list, tuple)) or len(v) not in (2, 3):
+        raise spec_error("expected a list of 2 or 3 numbers", hint, value=v)
+    for i, x in enumerate(v):
+        if not isinstance(x, (int, float)) or isinstance(x, bool):
+            raise spec_error("not a number", hint, key=(i,), value=x)
+        if not math.isfinite(x):
+            raise spec_error("not a finite number", hint, key=(i,), value=x)
+    return tuple(float(x) for x in v)
+
+
+RelativeVector = Annotated[tuple[float, ...], PlainValidator(_plane_or_space_vector)]
+
+
+class RelativeState(SpecModel):
+    """Chaser position and velocity relative to the target, orbit frame.
+
+    Attributes
+    ----------
+    position_m : tuple of float
+        (x, y) or (x, y, z), m.
+    velocity_mps : tuple of float
+        Same components as ``position_m``, m/s.
+    """
+
+    position_m: RelativeVector
+    velocity_mps: RelativeVector
+
+    @model_validator(mode="after")
+    def _same_length(self) -> RelativeState:
+        if len(self.velocity_mps) != len(self.position_m):
+            raise spec_error(f"has {len(self.velocity_mps)} components but {{here}}position_m has "
+                             f"{len(self.position_m)}", "give position and velocity the same components",
+                             key=("velocity_mps",), value=list(self.velocity_mps))
+        return self
+
+    @property
+    def state(self) -> np.ndarray:
+        """``[position, velocity]`` in SI units (read-only)."""
+        return readonly(np.array(self.position_m + self.velocity_mps))
+
+
+class RendezvousBoundary(SpecModel):
+    """Maneuver interval and boundary states (``tf_s > t0_s``)."""
+
+    t0_s: float = 0.0
+    tf_s: float
+    initial: RelativeState
+    final: RelativeState
+
+    @model_validator(mode="after")
+    def _consistent(self) -> RendezvousBoundary:
+        if self.tf_s <= self.t0_s:
+            raise spec_error(f"must be greater than {{here}}t0_s = {self.t0_s!r}",
+                             "give a positive maneuver duration", key=("tf_s",), value=self.tf_s)
+        if len(self.final.position_m) != len(self.initial.position_m):
+            raise spec_error(f"has {len(self.final.position_m)} components but {{here}}initial.position_m has "
+                             f"{len(self.initial.position_m)}", "give both states the same dimension",
+                             key=("final", "position_m"), value=list(self.final.position_m))
+        return self
+
+    @property
+    def dim(self) -> int:
+        """2 (coplanar) or 3."""
+        return len(self.initial.position_m)
+
+
+class Orbit(SpecModel):
+    """Circular target orbit. ``mean_motion_radps``: orbital rate n, rad/s."""
+
+    mean_motion_radps: PositiveFloat
+
+
+class Thruster(SpecModel):
+    """Constant-magnitude thruster. ``accel_mps2``: thrust acceleration a while burning, m/s^2."""
+
+    accel_mps2: PositiveFloat
+
+
+class RendezvousDiscretization(SpecModel):
+    """Discretisation of both methods.
+
+    Attributes
+    ----------
+    burns : int
+        ``scp_arcs``: number of burn arcs, separated by coast arcs (2: burn - coast - burn).
+    subintervals_per_burn : int
+        ``scp_arcs``: equal Hermite-Simpson sub-intervals of each burn (12 in the paper).
+    grid_steps : int
+        ``lcvx``: zero-order-hold steps over the maneuver (also the certificate of ``scp_arcs``).
+    """
+
+    burns: Annotated[int, Field(ge=1, le=20)] = 2
+    subintervals_per_burn: Annotated[int, Field(ge=1, le=500)] = 12
+    grid_steps: Annotated[int, Field(ge=2, le=100000)] = 600
+
+
+class RendezvousVerification(SpecModel):
+    """Dense re-propagation of the planned thrust.
+
+    Attributes
+    ----------
+    grid_points : int
+        Points of the dense output grid.
+    rtol, atol : float
+        Integrator tolerances.
+    final_position_tol_m, final_velocity_tol_mps : float
+        Allowed distance of the propagated final state from the target.
+    thrust_tol : float
+        Allowed deviation of the planned thrust magnitude from its bound (|u| <= Gamma <= 1).
+    """
+
+    grid_points: Annotated[int, Field(ge=100)] = 4001
+    rtol: PositiveFloat = 1e-11
+    atol: PositiveFloat = 1e-9
+    final_position_tol_m: PositiveFloat = 1.0
+    final_velocity_tol_mps: PositiveFloat = 0.01
+    thrust_tol: PositiveFloat = 1e-6
+
+
+class RendezvousProblem(ProblemBase):
+    """A ``rendezvous`` problem file (see ``problems/wang2003_rendezvous.yaml``).
+
+    ``method``: ``scp_arcs`` (the paper's burn/coast transcription solved by SCP) or
+    ``lcvx`` (lossless convexification on a fixed grid, one SOCP). ``certify``: with
+    ``scp_arcs``, also solve the ``lcvx`` problem and report the gap to its global optimum.
+    """
+
+    family: Literal["rendezvous"]
+    method: Literal["scp_arcs", "lcvx"] = "scp_arcs"  # type: ignore[assignment]
+    orbit: Orbit
+    spacecraft: Thruster
+    boundary: RendezvousBoundary
+    objective: Literal["burn_time"] = "burn_time"
+    discretization: RendezvousDiscretization = RendezvousDiscretization()
+    certify: bool = True
+    solver: SolverSettings = SolverSettings(max_iterations=200)
+    verification: RendezvousVerification = RendezvousVerification()
+    reference: Reference | None = None
