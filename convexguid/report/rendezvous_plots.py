@@ -22,8 +22,8 @@ def _components(solution: Solution, template: str) -> list[tuple[str, str]]:
 
 def _history(solution: Solution, template: str, title: str, ylabel: str, path: Path, save) -> Path:
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
-    for (axis, col), color in zip(_components(solution, template), ("C0", "C1", "C2")[: len(_components(solution, template))],
-                                 strict=True):
+    components = _components(solution, template)
+    for (axis, col), color in zip(components, ("C0", "C1", "C2")[: len(components)], strict=True):
         ax.plot(solution.dense.t, solution.dense.columns[col], color=color, lw=1.4, label=axis)
         if solution.nodes is not None and col in solution.nodes.columns and solution.method == "scp_arcs":
             ax.plot(solution.nodes.t, solution.nodes.columns[col], "o", color=color, mfc="none", ms=4)

@@ -18,6 +18,18 @@ from convexguid.report.plots import plot_solution
 from convexguid.solution import Solution, write_text_atomic
 from convexguid.spec import ProblemSpec, load_problem
 
+KEY_FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
+    "rendezvous": (
+        ("burn_time_s", "total burn time, s"),
+        ("burn_arcs_s", "burns [start, end], s"),
+        ("lcvx_burn_time_s", "lcvx global optimum on the fixed grid, s"),
+        ("lcvx_burn_arcs_s", "lcvx burns [start, end], s"),
+        ("lcvx_gap_rel", "(scp_arcs - lcvx) / lcvx"),
+        ("planned_direction_norm_min", "smallest norm of the interpolated direction on burns (1 at nodes)"),
+    ),
+}
+"""Family figures listed under each case (summary key, description), beyond the paper comparison."""
+
 DEFAULT_PROBLEMS_DIR = Path("problems")
 DEFAULT_REPORT = Path("validation/REPORT.md")
 
@@ -94,6 +106,15 @@ def _fmt(value: float | None) -> str:
     return f"{value:.6g}"
 
 
+def _fmt_any(value: object) -> str:
+    """Numbers as in :func:`_fmt`; nested lists of numbers bracketed."""
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_fmt_any(v) for v in value) + "]"
+    if isinstance(value, (int, float)) or value is None:
+        return _fmt(value)
+    return str(value)
+
+
 def render(results: list[CaseResult], base: Path) -> str:
     """The markdown report."""
     lines = ["# convexguid validation report", "",
@@ -126,6 +147,11 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
               f"solver `{sol.solver}`; wall time {sol.wall_time_s:.3f} s "
               f"(SCP {sol.timing.get('scp_s', float('nan')):.3f} s, of which convex solver "
               f"{sol.timing.get('solver_s', float('nan')):.3f} s)."]
+    summary = sol.summary()
+    figures = [(label, summary[key]) for key, label in KEY_FIGURES.get(sol.family, ()) if key in summary]
+    if figures:
+        lines += ["", "| figure | value |", "|---|---|"]
+        lines += [f"| {label} | {_fmt_any(value)} |" for label, value in figures]
     v = sol.verification
     if v is not None:
         lines += ["", f"Dense verification ({v.grid_points} points, SciPy DOP853 re-propagation of the plan):",

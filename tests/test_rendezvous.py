@@ -1,0 +1,228 @@
+"""Rendezvous family (Wang & Tang 2003): exact dynamics, transcription, both methods, verification, bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.linalg import expm
+
+from convexguid.api import solve
+from convexguid.cli import main
+from convexguid.dynamics.clohessy_wiltshire import cw_matrices, cw_stm, cw_stm_derivative, cw_zoh
+from convexguid.errors import SpecError
+from convexguid.formulations.rendezvous import build_case
+from convexguid.formulations.rendezvous_arcs import ArcsProgram
+from convexguid.formulations.rendezvous_lcvx import burn_structure, solve_lcvx
+from convexguid.spec import load_problem
+from convexguid.transcription.hermite_simpson import hermite_simpson_defects
+
+PAPER = Path(__file__).parent.parent / "problems" / "wang2003_rendezvous.yaml"
+SPACE = Path(__file__).parent.parent / "problems" / "wang2003_rendezvous_3d.yaml"
+N = 0.0011313
+
+
+# --- exact: dynamics and transcription -------------------------------------------------------
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("dt", [0.5, 60.0, 600.0, 5400.0])
+def test_stm_matches_matrix_exponential(dim, dt):
+    A, _ = cw_matrices(N, 0.5, dim)
+    assert np.allclose(cw_stm(N, dt, dim), expm(A * dt), rtol=1e-12, atol=1e-12 * max(1.0, dt))
+
+
+def test_stm_derivative_is_a_times_stm():
+    h = 1e-30
+    numeric = np.imag(cw_stm(N, 123.0 + 1j * h, 3)) / h
+    assert np.allclose(cw_stm_derivative(N, 123.0, 3), numeric, rtol=1e-12, atol=1e-15)
+
+
+def test_zoh_matches_integration_with_constant_thrust():
+    u = np.array([0.3, -0.8, 0.52])
+    x0 = np.array([1000.0, -50.0, 20.0, -3.0, 1.0, 0.5])
+    A, B = cw_matrices(N, 0.5, 3)
+    phi, gam = cw_zoh(N, 0.5, 7.0, 3)
+    ref = solve_ivp(lambda t, x: A @ x + B @ u, (0, 7.0), x0, rtol=1e-12, atol=1e-12).y[:, -1]
+    assert np.allclose(phi @ x0 + gam @ u, ref, rtol=1e-10, atol=1e-9)
+
+
+def _pendulum(x, u):
+    return np.column_stack([x[:, 1], -np.sin(x[:, 0]) + u[:, 0]])
+
+
+def _pendulum_jac(x, u):
+    F = np.zeros((x.shape[0], 2, 2))
+    F[:, 0, 1] = 1.0
+    F[:, 1, 0] = -np.cos(x[:, 0])
+    G = np.zeros((x.shape[0], 2, 1))
+    G[:, 1, 0] = 1.0
+    return F, G
+
+
+def test_hermite_simpson_jacobians_match_finite_differences():
+    rng = np.random.default_rng(1)
+    args = [rng.normal(size=(3, 2)), rng.normal(size=(3, 1)), rng.normal(size=(3, 2)), rng.normal(size=(3, 1)),
+            np.array([0.3, 0.7, 1.1])]
+    hs = hermite_simpson_defects(_pendulum, _pendulum_jac, *args)
+    eps = 1e-6
+    for index, analytic in zip(range(5), (hs.d_x0, hs.d_u0, hs.d_x1, hs.d_u1, hs.d_h[:, :, None]), strict=True):
+        width = 1 if index == 4 else args[index].shape[1]
+        for j in range(width):
+            plus = [a.copy() for a in args]
+            minus = [a.copy() for a in args]
+            if index == 4:
+                plus[4] += eps
+                minus[4] -= eps
+            else:
+                plus[index][:, j] += eps
+                minus[index][:, j] -= eps
+            numeric = (hermite_simpson_defects(_pendulum, _pendulum_jac, *plus).values
+                       - hermite_simpson_defects(_pendulum, _pendulum_jac, *minus).values) / (2 * eps)
+            assert np.allclose(analytic[:, :, j], numeric, atol=1e-7)
+
+
+def test_hermite_simpson_defect_is_fourth_order_on_free_motion():
+    A, _ = cw_matrices(N, 0.5, 2)
+    x0 = np.array([[15000.0, -500.0, -100.0, 10.0]])
+    errors = []
+    for h in (40.0, 20.0):
+        x1 = (cw_stm(N, h, 2) @ x0[0])[None]
+        hs = hermite_simpson_defects(lambda x, u: x @ A.T, lambda x, u: (np.broadcast_to(A, (1, 4, 4)),
+                                                                          np.zeros((1, 4, 1))),
+                                     x0, np.zeros((1, 1)), x1, np.zeros((1, 1)), np.array([h]))
+        errors.append(np.abs(hs.values).max())
+    assert errors[0] / errors[1] > 25  # local error O(h^5): halving h divides it by ~32
+
+
+# --- the paper's NLP -------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def paper_case():
+    return build_case(load_problem(PAPER))
+
+
+def test_nlp_dimensions_are_the_papers(paper_case):
+    size = ArcsProgram(paper_case, 2, 12).size()
+    assert (size.num_variables, size.num_equality_constraints, size.num_inequality_constraints) == (159, 135, 3)
+
+
+def test_arcs_jacobians_match_finite_differences(paper_case):
+    program = ArcsProgram(paper_case, 2, 4)
+    rng = np.random.default_rng(0)
+    x = program.initial_guess() + 0.01 * program.variable_scale() * rng.normal(size=program.num_variables)
+    ev = program.evaluate(x)
+    scale = program.variable_scale()
+    for k, block in enumerate(ev.equalities):
+        jac = block.jacobian.toarray()
+        for j in rng.choice(program.num_variables, 12, replace=False):
+            step = 1e-6 * scale[j]
+            xp, xm = x.copy(), x.copy()
+            xp[j] += step
+            xm[j] -= step
+            numeric = (program.evaluate(xp, False).equalities[k].values
+                       - program.evaluate(xm, False).equalities[k].values) / (2 * step)
+            assert np.allclose(jac[:, j], numeric, rtol=1e-5, atol=1e-9), (block.name, j)
+
+
+@pytest.fixture(scope="module")
+def paper_solution():
+    return solve(PAPER)
+
+
+@pytest.fixture(scope="module")
+def fine_lcvx(paper_case):
+    return solve_lcvx(paper_case, 2400)
+
+
+def test_scp_arcs_converges_to_the_lcvx_optimum(paper_solution, paper_case, fine_lcvx):
+    s = paper_solution.summary()
+    assert s["status"] == "converged"
+    assert (s["num_variables"], s["num_equality_constraints"], s["num_inequality_constraints"]) == (159, 135, 3)
+    assert fine_lcvx.status == "converged"
+    gap = (s["burn_time_s"] - fine_lcvx.objective) / fine_lcvx.objective
+    assert abs(gap) < 5e-3
+    # never below the global optimum of the grid by more than the two discretizations' error
+    coarse = solve_lcvx(paper_case, 600).objective
+    discretization = abs(coarse - fine_lcvx.objective) + abs(s["planned_direction_norm_min"] - 1) * s["burn_time_s"]
+    assert s["burn_time_s"] >= fine_lcvx.objective - discretization
+
+
+def test_burn_structure_agrees_within_a_subinterval(paper_solution, fine_lcvx):
+    arcs = paper_solution.summary()["burn_arcs_s"]
+    assert len(arcs) == len(fine_lcvx.burns) == 2
+    for (start, end), burn in zip(arcs, fine_lcvx.burns, strict=True):
+        subinterval = (end - start) / 12
+        assert abs(start - burn.start_s) < subinterval
+        assert abs(end - burn.end_s) < subinterval
+
+
+def test_dense_verification_of_the_paper_plan(paper_solution):
+    v = paper_solution.verification
+    assert v.passed
+    assert v.final_errors["final_position_error_m"] < 1.0
+    assert v.final_errors["final_velocity_error_mps"] < 0.01
+    thrust = paper_solution.dense.columns["thrust_accel_mps2"]
+    burning = thrust > 0
+    assert np.allclose(thrust[burning], 0.5, rtol=1e-12)  # the engine flies full thrust on burns
+    assert paper_solution.summary()["planned_direction_norm_min"] > 0.9999
+
+
+def test_lcvx_is_nearly_bang_off_bang(paper_case):
+    plan = solve_lcvx(paper_case, 600)
+    assert plan.status == "converged"
+    assert plan.extras["intermediate_throttle_share"] < 0.02
+    assert plan.extras["lossless_gap_max"] < 1e-6
+    assert len(plan.burns) == 2
+
+
+def test_burn_structure_reads_partial_steps():
+    grid = np.arange(11.0)
+    throttle = np.array([0, 0.5, 1, 1, 0, 0, 0.25, 0, 1, 0.4])
+    arcs = burn_structure(grid, throttle)
+    assert [(a.start_s, a.end_s) for a in arcs] == [(1.5, 4.0), (6.0, 6.25), (8.0, 9.4)]
+
+
+def test_out_of_plane_case_converges_and_verifies():
+    sol = solve(SPACE)
+    s = sol.summary()
+    assert sol.ok
+    assert s["num_variables"] == 26 * 9 + 3
+    assert abs(s["lcvx_gap_rel"]) < 5e-3
+    assert np.abs(sol.dense.columns["z_m"]).max() > 100  # the z motion is really there
+
+
+# --- bad input and infeasible problems --------------------------------------------------------------
+
+@pytest.mark.parametrize("method", ["scp_arcs", "lcvx"])
+def test_too_little_thrust_is_infeasible(method):
+    sol = solve(PAPER, [f"method={method}", "spacecraft.accel_mps2=0.1"])
+    assert sol.status == "infeasible"
+    assert "infeasible" in sol.message and "\n" not in sol.message
+
+
+@pytest.mark.parametrize("override, key", [
+    ("boundary.tf_s=0", "boundary.tf_s"),
+    ("boundary.tf_s=-5", "boundary.tf_s"),
+    ("discretization.subintervals_per_burn=0", "discretization.subintervals_per_burn"),
+    ("boundary.initial.position_m=[.nan, 0]", "boundary.initial.position_m.0"),
+    ("boundary.initial.velocity_mps=[1, 2, 3]", "boundary.initial.velocity_mps"),
+    ("spacecraft.accel_mps2=0", "spacecraft.accel_mps2"),
+    ("method=shooting", "method"),
+])
+def test_bad_input_names_the_key(override, key):
+    with pytest.raises(SpecError) as err:
+        load_problem(PAPER, [override])
+    message = str(err.value)
+    assert "\n" not in message and str(PAPER) in message and key in message
+
+
+def test_cli_summary_json(tmp_path):
+    out = tmp_path / "summary.json"
+    assert main(["solve", str(PAPER), "--quiet", "--summary-json", str(out)]) == 0
+    summary = json.loads(out.read_text())
+    assert summary["family"] == "rendezvous" and summary["method"] == "scp_arcs"
+    assert summary["verification"]["passed"] is True
+    assert summary["num_equality_constraints"] == 135
