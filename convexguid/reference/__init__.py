@@ -10,5 +10,7 @@ import it lazily, so importing this package never requires it.
 from __future__ import annotations
 
 from convexguid.reference.ipopt_flat import ReferenceResult, casadi_available, solve_flat_attitude_ipopt
+from convexguid.reference.ipopt_rendezvous import ArcsReferenceResult, cw_free_motion, solve_rendezvous_arcs_ipopt
 
-__all__ = ["ReferenceResult", "casadi_available", "solve_flat_attitude_ipopt"]
+__all__ = ["ArcsReferenceResult", "ReferenceResult", "casadi_available", "cw_free_motion", "solve_flat_attitude_ipopt",
+           "solve_rendezvous_arcs_ipopt"]

@@ -94,12 +94,12 @@ class SubproblemAssembler:
         self.eq_rows = (eq_start, eq_start + self.n_eq)
         pat = _Pattern((self.cones.rows, self.num_z))
         # zero cone: A d = b - A x ; J d - y = -r
-        pat.add_dense(0, 0, n_a, n)
+        _add_jacobian(pat, 0, linear.A, n_a, n)
         _add_jacobian(pat, n_a, first.residual_jacobian, self.m, n)
         pat.add_diagonal(n_a, y0, self.m)
         row = n_a + self.m
         # nonnegative cone, in order: G, M y - s_o, lin. ineq, +eq, -eq, -slacks, trust region
-        pat.add_dense(row, 0, n_g, n)
+        _add_jacobian(pat, row, linear.G, n_g, n)
         row += n_g
         pat.add_sparse(row, y0, outputs.M)
         pat.add_diagonal(row, so0, n_o)
@@ -141,13 +141,17 @@ class SubproblemAssembler:
         jac_g = [_jacobian_data(b.jacobian) for b in ev.inequalities]
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
         neg_e = [-j for j in jac_e]
-        a_blocks = [lin.A, _jacobian_data(ev.residual_jacobian), -np.ones(self.m), lin.G,
+        a_blocks = [_jacobian_data(lin.A), _jacobian_data(ev.residual_jacobian), -np.ones(self.m),
+                    _jacobian_data(lin.G),
                     self._m_data, -np.ones(n_o), *jac_g, -np.ones(self.n_ineq),
                     *jac_e, -np.ones(self.n_eq), *neg_e, -np.ones(self.n_eq),
                     -np.ones(self.n_slack), 1.0 / self.scale, -1.0 / self.scale]
         A = self._a_pattern.matrix(a_blocks)
         A.data *= self._a_data_scale
-        b = np.concatenate([lin.b - lin.A @ x, -ev.residuals, lin.h - lin.G @ x, self.outputs.m,
+        room = lin.h - lin.G @ x
+        # a hard inequality the iterate meets only to the backend's tolerance must not make d = 0 infeasible
+        room[(room < 0) & (room > -1e-7 * (1 + np.abs(lin.h)))] = 0.0
+        b = np.concatenate([lin.b - lin.A @ x, -ev.residuals, room, self.outputs.m,
                             -g, -e, e, np.zeros(self.n_slack), np.full(2 * n, radius)])
         p_data = self._p_residual
         if self.curvature:

@@ -164,18 +164,21 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
         merit_new = merit_at(x_new, ev_new)
         convexify += time.perf_counter() - t
         ratio = _ratio(merit - merit_new, predicted)
-        if ratio < settings.expand_ratio and raw.equalities:
+        if ratio < settings.expand_ratio and (raw.equalities or raw.inequalities):
             # Second-order correction: the linear model cannot see the curvature of the
             # equalities, so a good step can look bad (Maratos effect); pull x_new back
             # onto e = 0 along the minimum-norm direction and judge the corrected point.
             t = time.perf_counter()
-            x_soc = x_new + _second_order_correction(program, raw, ev_new)
-            _, ev_soc = evaluate(x_soc, jacobians=False)
-            merit_soc = merit_at(x_soc, ev_soc)
+            raw_new = program.evaluate(x_new, jacobians=False)
+            correction = _second_order_correction(program, raw, raw_new, x_new)
+            if correction is not None:
+                x_soc = x_new + correction
+                _, ev_soc = evaluate(x_soc, jacobians=False)
+                merit_soc = merit_at(x_soc, ev_soc)
+                if _ratio(merit - merit_soc, predicted) > ratio:
+                    x_new, ev_new, merit_new = x_soc, ev_soc, merit_soc
+                    ratio = _ratio(merit - merit_new, predicted)
             convexify += time.perf_counter() - t
-            if _ratio(merit - merit_soc, predicted) > ratio:
-                x_new, ev_new, merit_new = x_soc, ev_soc, merit_soc
-                ratio = _ratio(merit - merit_new, predicted)
         step = float(np.max(np.abs(d) / program.variable_scale()))
         accepted = ratio >= settings.accept_ratio
         if accepted:
@@ -224,17 +227,40 @@ def _ratio(actual: float, predicted: float) -> float:
     return actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
 
 
-def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_trial: Evaluation) -> np.ndarray:
-    """Least-norm (in scaled units) ``c`` with :math:`\\nabla e(x)\\,c = -e(x + d)` and :math:`A c = 0`.
+def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_trial: Evaluation,
+                             x_trial: np.ndarray) -> np.ndarray | None:
+    """Least-norm (scaled) ``c`` pulling the trial point back onto the nonlinear constraints.
 
+    Solves :math:`\\nabla e(x)\\,c = -e(x + d)` for the equalities and the inequalities that the
+    trial point breaks, with :math:`A c = 0` for the hard linear equalities; ``None`` if the
+    corrected point would break a hard linear inequality (those are kept exactly).
     Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 15.6 (second-order correction).
     """
     scale = program.variable_scale()
-    jac = np.vstack([b.jacobian.toarray() if hasattr(b.jacobian, "toarray") else b.jacobian
-                     for b in at_x.equalities] + [program.linear_constraints().A])
-    rhs = np.concatenate([-b.values for b in at_trial.equalities] + [np.zeros(program.linear_constraints().A.shape[0])])
-    scaled, *_ = scipy.linalg.lstsq(jac * scale, rhs, lapack_driver="gelsy")
-    return scaled * scale
+    lin = program.linear_constraints()
+    rows, rhs = [], []
+    for block_x, block_trial, only_violated in ([(b, t, False) for b, t in zip(at_x.equalities, at_trial.equalities,
+                                                                              strict=True)]
+                                                + [(b, t, True) for b, t in zip(at_x.inequalities,
+                                                                                at_trial.inequalities, strict=True)]):
+        pick = block_trial.values > 0 if only_violated else np.ones(block_trial.values.size, bool)
+        if pick.any():
+            jac = block_x.jacobian.toarray() if hasattr(block_x.jacobian, "toarray") else block_x.jacobian
+            rows.append(jac[pick])
+            rhs.append(-block_trial.values[pick])
+    if not rows:
+        return None
+    rows.append(_dense(lin.A))
+    rhs.append(np.zeros(lin.A.shape[0]))
+    scaled, *_ = scipy.linalg.lstsq(np.vstack(rows) * scale, np.concatenate(rhs), lapack_driver="gelsy")
+    correction = scaled * scale
+    if lin.G.shape[0] and np.any(lin.G @ (x_trial + correction) - lin.h > 1e-9 * (1 + np.abs(lin.h))):
+        return None
+    return correction
+
+
+def _dense(matrix) -> np.ndarray:
+    return matrix.toarray() if hasattr(matrix, "toarray") else np.asarray(matrix)
 
 
 def _split_by_block(values: np.ndarray, ev: Evaluation) -> dict[str, np.ndarray]:

@@ -1,0 +1,300 @@
+"""Time the three rendezvous solvers on one problem file: ``lcvx``, ``scp_arcs`` and IPOPT on the arcs NLP.
+
+In one run, each method solves the problem ``repeat`` times and the fastest run is reported:
+
+- ``lcvx``: the lossless-convexification SOCP on the problem's ``discretization.grid_steps``
+  zero-order-hold grid (:func:`convexguid.formulations.rendezvous_lcvx.solve_lcvx`), one
+  convex solve whose optimum is global for that grid;
+- ``scp_arcs``: Wang & Tang's burn/coast NLP (:class:`~convexguid.formulations.rendezvous_arcs.ArcsProgram`)
+  by the SCP engine (:func:`convexguid.scp.engine.solve_scp`) with the problem's solver settings,
+  from :meth:`ArcsProgram.initial_guess`;
+- ``ipopt``: the same NLP, written independently in CasADi and solved by IPOPT with exact
+  Hessians (:func:`convexguid.reference.solve_rendezvous_arcs_ipopt`) from the same initial
+  guess, when ``casadi`` is installed.
+
+Run it as ``python -m convexguid.bench_rendezvous problems/wang2003_rendezvous.yaml --repeat 3``.
+
+References
+----------
+Wang H., Tang G., "Optimal finite thrust rendezvous using nonlinear programming",
+J. National Univ. of Defense Technology 25(5), 2003.
+Acikmese B., Ploen S. R., "Convex programming approach to powered descent guidance
+for Mars landing", J. Guidance, Control, and Dynamics 30(5), 2007 (lossless convexification).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+import shlex
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import TypeVar
+
+from convexguid.bench import _one_line, _version
+from convexguid.formulations.rendezvous import Rendezvous, RendezvousPlan, build_case
+from convexguid.formulations.rendezvous_arcs import ArcsProgram
+from convexguid.formulations.rendezvous_lcvx import solve_lcvx
+from convexguid.reference import casadi_available, solve_rendezvous_arcs_ipopt
+from convexguid.scp.engine import solve_scp
+from convexguid.scp.problem import SCPSettings
+from convexguid.solution import write_text_atomic
+from convexguid.spec import load_problem
+
+IPOPT_TOLERANCE = 1e-10
+"""IPOPT's ``tol`` in the benchmark (tighter than the SCP's, so IPOPT's burn time is the NLP reference)."""
+
+LCVX_SOLVER_TARGET_S = 0.1
+"""Target: ``lcvx`` convex-solver time well under this, s."""
+
+SCP_WALL_TARGET_S = 0.5
+"""Target: ``scp_arcs`` wall time under this, s."""
+
+COLUMNS = ("method", "status", "burn time s", "gap to lcvx", "iterations", "wall s", "solver s", "convexify s",
+           "setup s")
+"""Table columns (see the caption written by :func:`rendezvous_bench_markdown`)."""
+
+_T = TypeVar("_T")
+
+
+@dataclass(frozen=True)
+class RendezvousBenchRow:
+    """One method: status, burn time and the timings of the fastest of ``repeat`` runs (s).
+
+    Timings that do not apply to the method are ``None`` (printed ``-``); ``ok`` is whether it
+    converged (IPOPT: reported success); ``message`` explains a failure (not in the table).
+    """
+
+    method: str
+    status: str
+    burn_time_s: float | None = None
+    iterations: int | None = None
+    wall_s: float | None = None
+    solver_s: float | None = None
+    convexify_s: float | None = None
+    setup_s: float | None = None
+    ok: bool = False
+    message: str = ""
+
+    def cells(self, lcvx_burn_time_s: float | None) -> list[str]:
+        """The row as strings in the order of :data:`COLUMNS`; the gap is relative to ``lcvx_burn_time_s``."""
+        def num(v: float | None, fmt: str) -> str:
+            return "-" if v is None else format(v, fmt)
+
+        gap = None
+        if self.burn_time_s is not None and lcvx_burn_time_s and self.method != "lcvx":
+            gap = (self.burn_time_s - lcvx_burn_time_s) / lcvx_burn_time_s
+        return [self.method, self.status, num(self.burn_time_s, ".9g"), num(gap, ".2e"),
+                "-" if self.iterations is None else str(self.iterations), num(self.wall_s, ".4f"),
+                num(self.solver_s, ".4f"), num(self.convexify_s, ".4f"), num(self.setup_s, ".4f")]
+
+
+def _best_of(repeat: int, run: Callable[[], _T], wall: Callable[[_T], float]) -> tuple[_T, list[_T]]:
+    """The fastest of ``repeat`` (at least one) calls of ``run`` by ``wall``, and all of them."""
+    runs = [run() for _ in range(max(1, repeat))]
+    return min(runs, key=wall), runs
+
+
+def _failed(method: str, exc: Exception) -> RendezvousBenchRow:
+    text = f"{type(exc).__name__}: {exc}"
+    return RendezvousBenchRow(method, f"failed: {_one_line(text)}", message=text)
+
+
+def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> RendezvousBenchRow:
+    """``lcvx`` on ``steps`` grid steps; wall = building the SOCP (ZOH, condensing) + solving + reading it."""
+    def run() -> tuple[RendezvousPlan, float]:
+        start = time.perf_counter()
+        plan = solve_lcvx(case, steps, backend)
+        return plan, time.perf_counter() - start
+
+    try:
+        (plan, wall), _ = _best_of(repeat, run, lambda r: r[1])
+    except Exception as exc:  # noqa: BLE001 - one failing method must not abort the benchmark
+        return _failed("lcvx", exc)
+    ok = plan.status == "converged"
+    return RendezvousBenchRow("lcvx", plan.status, plan.objective if ok else None, plan.iterations, wall,
+                              plan.timing.get("solver_s"), ok=ok, message=plan.message)
+
+
+def _scp_row(program: ArcsProgram, settings: SCPSettings, repeat: int) -> RendezvousBenchRow:
+    """``scp_arcs`` from the program's initial guess."""
+    try:
+        r, _ = _best_of(repeat, lambda: solve_scp(program, settings), lambda r: r.wall_time_s)
+    except Exception as exc:  # noqa: BLE001 - report and go on
+        return _failed("scp_arcs", exc)
+    ok = r.status == "converged"
+    return RendezvousBenchRow("scp_arcs", r.status, r.objective if ok else None, r.iterations, r.wall_time_s,
+                              r.solver_time_s, r.convexify_time_s, ok=ok, message=r.message)
+
+
+def _ipopt_row(program: ArcsProgram, repeat: int) -> RendezvousBenchRow:
+    """IPOPT on the arcs NLP from the program's initial guess; ``setup s`` is the fastest model build."""
+    x0 = program.initial_guess()
+    try:
+        best, runs = _best_of(repeat, lambda: solve_rendezvous_arcs_ipopt(program, x0, IPOPT_TOLERANCE),
+                              lambda r: r.wall_time_s)
+    except Exception as exc:  # noqa: BLE001 - report and go on
+        return _failed("ipopt", exc)
+    return RendezvousBenchRow("ipopt", best.status, best.objective if best.success else None, best.iterations,
+                              best.wall_time_s, setup_s=min(r.setup_time_s for r in runs), ok=best.success,
+                              message="" if best.success else f"IPOPT returned {best.status}")
+
+
+def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
+                          with_ipopt: bool | None = None) -> list[RendezvousBenchRow]:
+    """Benchmark rows ``lcvx``, ``scp_arcs`` and (if ``with_ipopt``) ``ipopt`` for one problem file.
+
+    Parameters
+    ----------
+    problem_path : str or path-like
+        ``rendezvous`` problem file (e.g. ``problems/wang2003_rendezvous.yaml``).
+    repeat : int
+        Timed runs per method; the fastest (by wall time) is kept.
+    with_ipopt : bool, optional
+        Also solve with CasADi + IPOPT; default: when ``casadi`` is installed.
+
+    Returns
+    -------
+    list of RendezvousBenchRow
+        In the order ``lcvx``, ``scp_arcs``, ``ipopt``.
+
+    Raises
+    ------
+    ValueError
+        If the file is not of the ``rendezvous`` family.
+    """
+    spec = load_problem(problem_path, [])
+    if spec.family != "rendezvous":
+        raise ValueError(f"{problem_path}: family {spec.family!r}, expected 'rendezvous'")
+    case = build_case(spec)
+    disc, s = spec.discretization, spec.solver
+    program = ArcsProgram(case, disc.burns, disc.subintervals_per_burn)
+    settings = SCPSettings(backend=s.backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
+                           trust_region=s.trust_region, penalty=s.penalty)
+    rows = [_lcvx_row(case, disc.grid_steps, s.backend, repeat), _scp_row(program, settings, repeat)]
+    if casadi_available() if with_ipopt is None else with_ipopt:
+        rows.append(_ipopt_row(program, repeat))
+    return rows
+
+
+def _by_method(rows: Sequence[RendezvousBenchRow], method: str) -> RendezvousBenchRow | None:
+    return next((r for r in rows if r.method == method), None)
+
+
+def _notes(rows: Sequence[RendezvousBenchRow]) -> list[str]:
+    """Targets met or not, the SCP-IPOPT burn-time agreement, then failures."""
+    lines = []
+    lcvx, scp, ipopt = (_by_method(rows, m) for m in ("lcvx", "scp_arcs", "ipopt"))
+    if lcvx is not None and lcvx.ok and lcvx.solver_s is not None:
+        met = "met" if lcvx.solver_s < LCVX_SOLVER_TARGET_S else "NOT met"
+        lines.append(f"lcvx solver time {lcvx.solver_s:.4f} s vs target < {LCVX_SOLVER_TARGET_S:g} s: {met}")
+    if scp is not None and scp.ok and scp.wall_s is not None:
+        met = "met" if scp.wall_s < SCP_WALL_TARGET_S else "NOT met"
+        lines.append(f"scp_arcs wall time {scp.wall_s:.4f} s vs target < {SCP_WALL_TARGET_S:g} s: {met}")
+    if scp is not None and ipopt is not None and scp.ok and ipopt.ok:
+        rel = abs(scp.burn_time_s - ipopt.burn_time_s) / ipopt.burn_time_s
+        lines.append(f"scp_arcs vs ipopt burn time (same NLP): relative difference {rel:.2e}")
+    for r in rows:
+        if not r.ok:
+            status = "failed" if r.status.startswith("failed") else r.status
+            lines.append(f"{r.method}: {status}: {_one_line(r.message, 200)}")
+    return lines
+
+
+def _markdown_table(rows: Sequence[RendezvousBenchRow]) -> str:
+    lcvx = _by_method(rows, "lcvx")
+    reference = lcvx.burn_time_s if lcvx is not None and lcvx.ok else None
+    align = [":---", ":---"] + ["---:"] * (len(COLUMNS) - 2)
+    lines = ["| " + " | ".join(COLUMNS) + " |", "| " + " | ".join(align) + " |"]
+    lines += ["| " + " | ".join(c.replace("|", "\\|") for c in r.cells(reference)) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: str | PathLike[str], repeat: int,
+                              grid_steps: int | None = None, ipopt_note: str | None = None,
+                              output: str | PathLike[str] | None = None) -> str:
+    """The benchmark as a markdown document: machine, versions, date, command, caption, table, notes."""
+    machine = platform.processor() or platform.machine()
+    versions = ", ".join(f"{p} {_version(p)}" for p in ("numpy", "scipy", "clarabel", "casadi"))
+    threads = ", ".join(f"{v}={os.environ.get(v, 'unset')}" for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"))
+    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    args = ["python", "-m", "convexguid.bench_rendezvous", str(problem_path), "--repeat", str(repeat)]
+    command = shlex.join(args + (["--output", str(output)] if output is not None else []))
+    steps = "the problem's `grid_steps`" if grid_steps is None else f"{grid_steps} steps"
+    header = [
+        f"# convexguid rendezvous benchmark: lcvx vs scp_arcs vs IPOPT on `{Path(problem_path).name}`",
+        "",
+        f"- Machine: {machine}, {os.cpu_count()} logical CPUs ({platform.platform()}, "
+        f"Python {platform.python_version()})",
+        f"- Versions: {versions}",
+        f"- BLAS/OpenMP threads: {threads} (numpy's BLAS is multi-threaded unless limited; on a busy machine "
+        "that slows the SCP's many small dense products)",
+        f"- Date: {when}",
+        f"- Command: `{command}`",
+        "",
+        f"Best of {repeat} runs per method, times in seconds. `lcvx`: one SOCP on {steps} (zero-order hold); "
+        "`wall s` includes building it, `solver s` is the convex solver alone, `iterations` its interior-point "
+        "iterations. `scp_arcs`: Wang & Tang's burn/coast NLP by SCP; `wall s` = `convexify s` (maps and "
+        "Jacobians) + `solver s` (convex subproblems) + bookkeeping, `iterations` are SCP iterations. `ipopt`: "
+        f"the same NLP in CasADi, IPOPT with exact Hessian (MUMPS, tol = {IPOPT_TOLERANCE:g}) from the same "
+        "initial guess; `wall s` is the solve call only, `setup s` builds the CasADi model. `gap to lcvx` = "
+        "(burn time - lcvx burn time) / lcvx burn time; the two transcriptions differ (Hermite-Simpson arcs vs "
+        "zero-order-hold grid), so it is a discretization difference, not an optimality gap. "
+        f"Targets: lcvx solver time well under {LCVX_SOLVER_TARGET_S:g} s at 600 steps; scp_arcs wall time "
+        f"under {SCP_WALL_TARGET_S:g} s.",
+    ]
+    if ipopt_note:
+        header += ["", ipopt_note]
+    footer = [f"- {line}" for line in _notes(rows)]
+    return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
+
+
+def run_rendezvous_bench(problem_path: str | PathLike[str], repeat: int,
+                         output: str | PathLike[str] | None = None) -> int:
+    """Time ``lcvx``, ``scp_arcs`` and IPOPT on one rendezvous problem, print the table, optionally save it.
+
+    Parameters
+    ----------
+    problem_path : str or path-like
+        ``rendezvous`` problem file.
+    repeat : int
+        Timed runs per method; the fastest is reported.
+    output : str or path-like, optional
+        Also write the markdown document here (atomically).
+
+    Returns
+    -------
+    int
+        0 if every method that ran converged, else 1. Without ``casadi`` the IPOPT row is
+        skipped (noted in the document), which does not count as a failure.
+    """
+    with_ipopt = casadi_available()
+    ipopt_note = None if with_ipopt else (
+        "IPOPT row skipped: casadi is not installed (pip install 'convexguid[bench]').")
+    rows = bench_rendezvous_rows(problem_path, repeat, with_ipopt)
+    steps = load_problem(problem_path, []).discretization.grid_steps
+    text = rendezvous_bench_markdown(rows, problem_path, repeat, steps, ipopt_note, output)
+    print(text, end="")
+    if output is not None:
+        write_text_atomic(Path(output), text)
+        print(f"table written to {output}")
+    return 0 if all(r.ok for r in rows) else 1
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m convexguid.bench_rendezvous PROBLEM [--repeat N] [--output FILE]``."""
+    parser = argparse.ArgumentParser(prog="python -m convexguid.bench_rendezvous", description=__doc__.split("\n")[0])
+    parser.add_argument("problem", nargs="?", type=Path, default=Path("problems/wang2003_rendezvous.yaml"))
+    parser.add_argument("--repeat", type=int, default=3, help="timed runs per method (best is reported)")
+    parser.add_argument("--output", type=Path, help="also write the table (markdown) here")
+    args = parser.parse_args(argv)
+    return run_rendezvous_bench(args.problem, args.repeat, args.output)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
