@@ -1,14 +1,26 @@
-"""Python entry points: load a problem, solve it, validate against the papers."""
+"""Python entry points: load a problem, solve or simulate it, validate against the papers."""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from convexguid.errors import SpecError
 from convexguid.formulations import FAMILY_SOLVERS
 from convexguid.scp.engine import IterationRecord
+from convexguid.sim.runner import simulate_problem
 from convexguid.solution import Solution
 from convexguid.spec import ProblemSpec, load_problem
+
+SIMULATED_FAMILIES = ("potential_function",)
+"""Families run by closed-loop simulation (:func:`simulate`) instead of planning."""
+
+
+def _spec(problem: str | Path | ProblemSpec, overrides: Sequence[str]) -> ProblemSpec:
+    """``problem`` loaded (a YAML path) or reloaded with ``overrides`` (a spec)."""
+    if isinstance(problem, ProblemSpec):
+        return load_problem(problem.source, overrides) if overrides else problem
+    return load_problem(problem, overrides)
 
 
 def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] = (),
@@ -17,9 +29,27 @@ def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] = (),
 
     ``overrides`` are ``dotted.key=value`` strings as for ``convexguid solve --set``;
     ``log`` receives one :class:`~convexguid.scp.engine.IterationRecord` per SCP iteration.
+    A simulated family (``potential_function``) is passed to :func:`simulate` (``log`` is unused).
     """
-    if isinstance(problem, ProblemSpec):
-        spec = load_problem(problem.source, overrides) if overrides else problem
-    else:
-        spec = load_problem(problem, overrides)
+    spec = _spec(problem, overrides)
+    if spec.family in SIMULATED_FAMILIES:
+        return simulate_problem(spec)
     return FAMILY_SOLVERS[spec.family](spec, log=log)
+
+
+def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] = ()) -> Solution:
+    """Simulate ``problem`` (a YAML path or a loaded spec of a simulated family, e.g. ``potential_function``).
+
+    ``overrides`` are ``dotted.key=value`` strings as for ``convexguid simulate --set``. See
+    :func:`convexguid.sim.runner.simulate_problem` for the status, checks and summary figures.
+
+    Raises
+    ------
+    SpecError
+        For invalid input or a family that is planned, not simulated (use :func:`solve`).
+    """
+    spec = _spec(problem, overrides)
+    if spec.family not in SIMULATED_FAMILIES:
+        raise SpecError(f"{spec.source}: family: {spec.family!r} is planned, not simulated; use convexguid solve "
+                        f"(simulate handles: {', '.join(SIMULATED_FAMILIES)})")
+    return simulate_problem(spec)

@@ -1,7 +1,7 @@
-"""Command line: ``convexguid solve|validate|bench`` (the contract of design.md).
+"""Command line: ``convexguid solve|simulate|validate|bench`` (the contract of design.md).
 
-Exit codes: 0 success; 1 the solve did not converge or its verification failed
-(the summary is still written); 2 bad input (one line, no traceback).
+Exit codes: 0 success; 1 the solve (simulation) did not converge (reach the command) or its
+verification failed (the summary is still written); 2 bad input (one line, no traceback).
 """
 
 from __future__ import annotations
@@ -21,22 +21,31 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="convexguid", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     solve = sub.add_parser("solve", help="plan one problem file, verify it, write results")
-    solve.add_argument("problem", type=Path)
-    solve.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
-                       help="override one YAML value (value parsed as YAML); repeatable")
-    solve.add_argument("--out", type=Path, help="directory for CSV trajectories, summary JSON and plots")
-    solve.add_argument("--summary-json", type=Path, help="write the summary JSON here")
-    solve.add_argument("--quiet", action="store_true", help="no iteration table")
+    _add_run_arguments(solve, "no iteration table")
+    simulate = sub.add_parser("simulate", help="simulate one closed-loop problem file (potential_function), "
+                              "check it, write results")
+    _add_run_arguments(simulate, "no start line and no per-case sweep table")
     validate = sub.add_parser("validate", help="solve the paper cases and write the validation report")
     validate.add_argument("problems", nargs="*", type=Path)
     validate.add_argument("--report", type=Path, default=Path("validation/REPORT.md"))
-    bench = sub.add_parser("bench", help="time the SCP against IPOPT on the same transcription")
+    bench = sub.add_parser("bench", help="time the SCP against IPOPT on the same transcription "
+                           "(rendezvous files: lcvx vs scp_arcs vs IPOPT; --nodes and --backends do not apply)")
     bench.add_argument("problem", nargs="?", type=Path, default=Path("problems/cai2018_flat_attitude.yaml"))
     bench.add_argument("--nodes", type=int, nargs="+", default=[16, 32, 64, 128])
     bench.add_argument("--repeat", type=int, default=3, help="timed runs per case (best is reported)")
     bench.add_argument("--backends", nargs="+", default=["clarabel", "osqp"])
     bench.add_argument("--output", type=Path, help="also write the table (markdown) here")
     return parser
+
+
+def _add_run_arguments(parser: argparse.ArgumentParser, quiet_help: str) -> None:
+    """Arguments shared by ``solve`` and ``simulate``."""
+    parser.add_argument("problem", type=Path)
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+                        help="override one YAML value (value parsed as YAML); repeatable")
+    parser.add_argument("--out", type=Path, help="directory for CSV trajectories, summary JSON and plots")
+    parser.add_argument("--summary-json", type=Path, help="write the summary JSON here")
+    parser.add_argument("--quiet", action="store_true", help=quiet_help)
 
 
 def _print_header() -> None:
@@ -85,6 +94,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if not args.quiet:
         _print_header()
     sol = solve(spec, log=None if args.quiet else _print_row)
+    return _finish(sol, args)
+
+
+def _finish(sol: Solution, args: argparse.Namespace) -> int:
+    """Print the result block, write the outputs and return the exit code (shared by solve and simulate)."""
     _print_result(sol)
     _write_outputs(sol, args.out, args.summary_json)
     if not sol.ok:
@@ -92,6 +106,33 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         print(f"convexguid: {args.problem}: {sol.status}: {reason}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from convexguid.api import simulate
+    from convexguid.spec import load_problem
+    from convexguid.spec.potential_function import PotentialFunctionProblem
+
+    spec = load_problem(args.problem, args.overrides)
+    if not args.quiet and isinstance(spec, PotentialFunctionProblem):
+        sweep = f"; sweep theta_m = {', '.join(map(str, spec.sweep.theta_m_deg))} deg" if spec.sweep else ""
+        print(f"simulating {spec.name}: {spec.simulation.t_final_s:g} s in steps of {spec.simulation.dt_s:g} s{sweep}")
+    sol = simulate(spec)
+    if not args.quiet:
+        _print_sweep(sol)
+    return _finish(sol, args)
+
+
+def _print_sweep(sol: Solution) -> None:
+    """One line per sweep case of a simulation (nothing without a sweep)."""
+    cases = sol.extras.get("sweep") or []
+    if cases:
+        print(f"{'theta_m deg':>11} {'t 1deg s':>9} {'t 0.1deg s':>10} {'min theta_b deg':>15} "
+              f"{'max |u| N m':>11} {'passed':>6}")
+    for c in cases:
+        times = [f"{t:.1f}" if t is not None else "-" for t in (c["maneuver_time_1deg_s"], c["maneuver_time_01deg_s"])]
+        print(f"{c['theta_m_deg']:>11g} {times[0]:>9} {times[1]:>10} {c['min_theta_b_deg']:>15.3f} "
+              f"{c['max_abs_torque_Nm']:>11.4g} {'yes' if c['passed'] else 'NO':>6}")
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -105,6 +146,12 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
+    from convexguid.spec import load_problem
+
+    if load_problem(args.problem).family == "rendezvous":
+        from convexguid.bench_rendezvous import run_rendezvous_bench
+
+        return run_rendezvous_bench(args.problem, args.repeat, args.output)
     from convexguid.bench import run_bench
 
     return run_bench(args.problem, args.nodes, args.repeat, args.backends, args.output)
@@ -112,7 +159,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    handlers = {"solve": _cmd_solve, "validate": _cmd_validate, "bench": _cmd_bench}
+    handlers = {"solve": _cmd_solve, "simulate": _cmd_simulate, "validate": _cmd_validate, "bench": _cmd_bench}
     try:
         return handlers[args.command](args)
     except ConvexGuidError as exc:

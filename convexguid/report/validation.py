@@ -27,6 +27,15 @@ KEY_FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
         ("lcvx_gap_rel", "(scp_arcs - lcvx) / lcvx"),
         ("planned_direction_norm_min", "smallest norm of the interpolated direction on burns (1 at nodes)"),
     ),
+    "potential_function": (
+        ("maneuver_time_1deg_s", "time to within 1 deg of the command, s"),
+        ("maneuver_time_01deg_s", "time to within 0.1 deg of the command, s"),
+        ("min_theta_b_deg", "smallest angle to the forbidden attitude, deg"),
+        ("theta_m_deg", "forbidden half-angle theta_m, deg"),
+        ("max_abs_torque_Nm", "largest torque component, N m"),
+        ("energy_N2m2s", "energy integral of squared torque, N^2 m^2 s"),
+        ("final_error_deg", "final attitude error, deg"),
+    ),
 }
 """Family figures listed under each case (summary key, description), beyond the paper comparison."""
 
@@ -143,10 +152,13 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
                      f"{'yes' if row.ok else 'NO'} |")
     if ref.notes:
         lines += ["", f"Reference notes: {' '.join(ref.notes.split())}"]
-    lines += ["", f"Status `{sol.status}` after {sol.iterations} SCP iterations ({sol.message}); "
-              f"solver `{sol.solver}`; wall time {sol.wall_time_s:.3f} s "
-              f"(SCP {sol.timing.get('scp_s', float('nan')):.3f} s, of which convex solver "
-              f"{sol.timing.get('solver_s', float('nan')):.3f} s)."]
+    if "scp_s" in sol.timing:
+        lines += ["", f"Status `{sol.status}` after {sol.iterations} SCP iterations ({sol.message}); "
+                  f"solver `{sol.solver}`; wall time {sol.wall_time_s:.3f} s (SCP {sol.timing['scp_s']:.3f} s, "
+                  f"of which convex solver {sol.timing.get('solver_s', float('nan')):.3f} s)."]
+    else:
+        lines += ["", f"Status `{sol.status}` ({sol.message}); {sol.method} with `{sol.solver}`, "
+                  f"{sol.iterations} steps; wall time {sol.wall_time_s:.3f} s."]
     summary = sol.summary()
     figures = [(label, summary[key]) for key, label in KEY_FIGURES.get(sol.family, ()) if key in summary]
     if figures:
@@ -154,7 +166,9 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
         lines += [f"| {label} | {_fmt_any(value)} |" for label, value in figures]
     v = sol.verification
     if v is not None:
-        lines += ["", f"Dense verification ({v.grid_points} points, SciPy DOP853 re-propagation of the plan):",
+        how = ("closed-loop simulation" if sol.family == "potential_function"
+               else "SciPy DOP853 re-propagation of the plan")
+        lines += ["", f"Dense verification ({v.grid_points} points, {how}):",
                   "", "| constraint | worst on dense grid | bound |", "|---|---|---|"]
         for c in v.checks:
             lines.append(f"| {c.name} | {c.worst:.6g} | {'<=' if c.sense == 'max' else '>='} {c.bound:g} |")

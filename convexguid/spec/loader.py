@@ -21,6 +21,8 @@ from pydantic_core import ErrorDetails
 from convexguid.errors import SpecError
 from convexguid.spec.common import SPEC_ERROR_TYPE, ProblemBase
 from convexguid.spec.flat_attitude import FlatAttitudeProblem
+from convexguid.spec.potential_function import PotentialFunctionProblem
+from convexguid.spec.quaternion_attitude import QuaternionAttitudeProblem
 from convexguid.spec.rendezvous import RendezvousProblem
 
 ProblemSpec = ProblemBase
@@ -29,6 +31,8 @@ ProblemSpec = ProblemBase
 FAMILY_MODELS: dict[str, type[ProblemBase]] = {
     "flat_attitude": FlatAttitudeProblem,
     "rendezvous": RendezvousProblem,
+    "quaternion_attitude": QuaternionAttitudeProblem,
+    "potential_function": PotentialFunctionProblem,
 }
 """Model class of each problem family, by the value of the ``family`` key."""
 

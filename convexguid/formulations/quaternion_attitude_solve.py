@@ -1,0 +1,229 @@
+"""Plan, verify and summarise a ``quaternion_attitude`` problem: SCP (minimum time or energy) or path transfer.
+
+The SCP plans on the nodes of :class:`~convexguid.formulations.quaternion_attitude.QuaternionProgram`;
+the plan's torque (linear between nodes) is then integrated with SciPy and every cone,
+the forbidden attitudes, the rate and torque boxes are checked on a dense grid. Where
+the path cuts a constraint between nodes, the node constraints are tightened by the
+amount seen (cone and forbidden-attitude margin, rate bound) and the problem is solved
+again from the current plan, at most :data:`MAX_TIGHTENINGS` times.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from convexguid.formulations.quaternion_attitude import (
+    AttitudeCase,
+    Cone,
+    Forbidden,
+    QuaternionProgram,
+    eigenaxis_guess,
+    eigenaxis_time_guess,
+)
+from convexguid.planners.path_transfer import PathTransferCone, PathTransferProblem, plan_path_transfer
+from convexguid.rotations import quat_angle_between
+from convexguid.scp.engine import IterationRecord, SCPResult, merge_results, solve_scp
+from convexguid.scp.problem import SCPSettings
+from convexguid.solution import Solution, Trajectory
+from convexguid.verify import (
+    AttitudeTrack,
+    ConstraintCheck,
+    Verification,
+    keep_out_angles_deg,
+    propagate_attitude,
+    verify_attitude_track,
+)
+
+MAX_TIGHTENINGS = 6
+"""Rounds of tightening the node constraints after a failed dense check."""
+
+
+def build_case(spec) -> AttitudeCase:
+    """SI arrays from a validated spec; the final quaternion's sign is chosen on the initial one's side."""
+    b, sc = spec.boundary, spec.spacecraft
+    q0, qf = np.array(b.initial.q), np.array(b.final.q)
+    if q0 @ qf < 0:
+        qf = -qf
+    cones = tuple(Cone(c.name, c.body_axis_unit, c.inertial_dir_unit, c.half_angle_rad, True) for c in spec.keep_out)
+    cones += tuple(Cone(c.name, np.array(c.body_axis) / np.linalg.norm(c.body_axis),
+                        np.array(c.inertial_dir) / np.linalg.norm(c.inertial_dir), np.radians(c.half_angle_deg),
+                        False) for c in spec.keep_in)
+    forbidden = tuple(Forbidden(f.name, np.array(f.quaternion), np.radians(f.min_angle_deg)) for f in spec.forbidden)
+    return AttitudeCase(spec.name, sc.inertia_matrix, sc.torque_max_Nm, np.radians(sc.rate_max_degps), b.t0_s, q0,
+                        np.array(b.initial.rate_radps), qf, np.array(b.final.rate_radps), cones, forbidden, b.tf_s)
+
+
+def path_transfer_problem(case: AttitudeCase) -> PathTransferProblem:
+    """The planner's view of the case (keep-out cones of one boresight; keep-in and forbidden attitudes unsupported)."""
+    keep_out = [c for c in case.cones if c.keep_out]
+    boresight = keep_out[0].body_axis if keep_out else np.array([0.0, 0.0, 1.0])
+    return PathTransferProblem(case.inertia, boresight, case.q0, case.qf,
+                               tuple(PathTransferCone(c.name, c.inertial_dir, c.half_angle) for c in keep_out),
+                               case.torque_max, case.rate_max)
+
+
+def verify_plan(case: AttitudeCase, t_end: float, torque: Callable[[float], np.ndarray], settings,
+                max_step: float) -> tuple[Verification, AttitudeTrack]:
+    """Integrate the planned torque and check every constraint of the case on a dense grid."""
+    t_grid = np.linspace(case.t0, t_end, settings.grid_points)
+    track = propagate_attitude(case.inertia, torque, case.q0, case.w0, t_grid, settings.rtol, settings.atol,
+                               max_step=max_step)
+    keep_out = [(c.name, c.body_axis, c.inertial_dir, np.degrees(c.half_angle)) for c in case.cones if c.keep_out]
+    base = verify_attitude_track(track, case.torque_max, keep_out, case.qf, case.wf, settings.constraint_tol,
+                                 settings.final_attitude_tol_rad, settings.final_rate_tol_radps,
+                                 rate_max=case.rate_max)
+    extra = [ConstraintCheck(f"keep_in_{c.name}_deg", float(keep_out_angles_deg(track.q, c.body_axis,
+                                                                                  c.inertial_dir).max()),
+                             float(np.degrees(c.half_angle)), "max") for c in case.cones if not c.keep_out]
+    extra += [ConstraintCheck(f"forbidden_{f.name}_deg", float(np.degrees(quat_angle_between(track.q, f.q)).min()),
+                              float(np.degrees(f.min_angle)), "min") for f in case.forbidden]
+    checks = base.checks + tuple(extra)
+    path_ok = all(c.violation <= settings.constraint_tol * max(1.0, abs(c.bound)) for c in checks)
+    finals_ok = (base.final_errors["final_attitude_error_rad"] <= settings.final_attitude_tol_rad
+                 and base.final_errors["final_rate_error_radps"] <= settings.final_rate_tol_radps)
+    return replace(base, checks=checks, passed=path_ok and finals_ok), track
+
+
+def _tightened(program: QuaternionProgram, x: np.ndarray, verification: Verification) -> QuaternionProgram | None:
+    """A program with node constraints tightened by what the dense check saw between nodes, or None if none failed."""
+    by_name = {c.name: c for c in verification.checks}
+    geometric = [c.violation for c in verification.checks
+                 if c.name.startswith(("keep_out_", "keep_in_", "forbidden_")) and c.violation > 0]
+    rate = by_name.get("rate_degps")
+    if not geometric and (rate is None or rate.violation <= 0):
+        return None
+    margin = program.margin + (np.radians(max(geometric)) + np.radians(0.02) if geometric else 0.0)
+    tight_case = program.case
+    if rate is not None and rate.violation > 0:
+        tight_case = replace(tight_case, rate_max=tight_case.rate_max - np.radians(rate.violation) * 1.5)
+    return QuaternionProgram(tight_case, program.K, program.nodes(x), program.final_time(x), margin)
+
+
+def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[QuaternionProgram, SCPResult,
+                                                                                Verification, AttitudeTrack]:
+    """SCP with dense verification and constraint tightening (see the module docstring)."""
+    s = spec.solver
+    settings = SCPSettings(backend=s.backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
+                           trust_region=s.trust_region, penalty=s.penalty)
+    K = spec.discretization.intervals
+    if guess_kind == "path_transfer":
+        plan = plan_path_transfer(path_transfer_problem(case))
+        tf_guess = case.tf or plan.maneuver_time_s
+        tau = np.linspace(0.0, 1.0, K + 1)
+        q, w, u = plan.sample(tau * plan.maneuver_time_s)
+        q = q * np.sign(q @ case.qf)[:, None] if plan.q[-1] @ case.qf < 0 else q
+        scale = plan.maneuver_time_s / tf_guess
+        guess = np.hstack([q, w * scale, u * scale**2])
+    else:
+        tf_guess = case.tf or eigenaxis_time_guess(case)
+        guess = eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf_guess, K + 1))
+    program = QuaternionProgram(case, K, guess, tf_guess)
+    result = solve_scp(program, settings, log)
+    for _ in range(MAX_TIGHTENINGS + 1):
+        tf = program.final_time(result.x)
+        verification, track = verify_plan(case, case.t0 + tf, program.torque_command(result.x), spec.verification,
+                                          max_step=tf / K / 4)
+        if result.status != "converged" or verification.passed:
+            break
+        tighter = _tightened(program, result.x, verification)
+        if tighter is None:
+            break
+        program = tighter
+        result = merge_results(result, solve_scp(program, settings, log, x0=result.x))
+    return program, result, verification, track
+
+
+def _dense_columns(case: AttitudeCase, track: AttitudeTrack) -> dict[str, np.ndarray]:
+    cols = {f"q{i + 1}": track.q[:, i] for i in range(4)}
+    cols.update({f"omega{i + 1}_degps": np.degrees(track.omega[:, i]) for i in range(3)})
+    cols.update({f"u{i + 1}_Nm": track.torque[:, i] for i in range(3)})
+    for c in case.cones:
+        kind = "keep_out" if c.keep_out else "keep_in"
+        cols[f"{kind}_{c.name}_deg"] = keep_out_angles_deg(track.q, c.body_axis, c.inertial_dir)
+    for f in case.forbidden:
+        cols[f"forbidden_{f.name}_deg"] = np.degrees(quat_angle_between(track.q, f.q))
+    return cols
+
+
+def cone_margin_deg(case: AttitudeCase, track: AttitudeTrack) -> float | None:
+    """Smallest angular clearance to any cone edge along the track, deg (negative inside a keep-out cone)."""
+    margins = []
+    for c in case.cones:
+        angle = keep_out_angles_deg(track.q, c.body_axis, c.inertial_dir)
+        margins.append((angle - np.degrees(c.half_angle)).min() if c.keep_out else
+                       (np.degrees(c.half_angle) - angle).min())
+    return float(min(margins)) if margins else None
+
+
+def eigenaxis_cone_clearance(case: AttitudeCase, samples: int = 721) -> dict[str, float]:
+    """Smallest angle (deg) between each keep-out cone's direction and its body axis along the eigenaxis slew."""
+    q = eigenaxis_guess(case, np.linspace(0.0, 1.0, samples))[:, :4]
+    return {c.name: float(keep_out_angles_deg(q, c.body_axis, c.inertial_dir).min()) for c in case.cones if c.keep_out}
+
+
+def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
+    """Plan with ``spec.method`` (``scp`` or ``path_transfer``), verify, and summarise."""
+    start = time.perf_counter()
+    case = build_case(spec)
+    extras: dict = {"eigenaxis_min_angle_deg": eigenaxis_cone_clearance(case)}
+    if spec.method == "path_transfer":
+        return _solve_path_transfer(case, spec, start, extras)
+    if spec.objective == "energy" and case.tf is None:
+        time_program, time_result, *_ = solve_scp_attitude(case, spec, None, spec.initial_guess)
+        if time_result.status != "converged":
+            return _failed(spec, time_result, time_program, start,
+                           "minimum time (which sets the energy problem's final time) did not converge: ")
+        extras["min_time_s"] = time_program.final_time(time_result.x)
+        case = replace(case, tf=spec.boundary.tf_min_time_factor * extras["min_time_s"])
+    program, result, verification, track = solve_scp_attitude(case, spec, log, spec.initial_guess)
+    x = result.x
+    tf = program.final_time(x)
+    nodes = program.nodes(x)
+    node_cols = {f"q{i + 1}": nodes[:, i] for i in range(4)}
+    node_cols.update({f"omega{i + 1}_degps": np.degrees(nodes[:, 4 + i]) for i in range(3)})
+    node_cols.update({f"u{i + 1}_Nm": nodes[:, 7 + i] for i in range(3)})
+    h = tf / program.K
+    energy = float(np.sum(np.trapezoid(track.torque**2, track.t, axis=0)))
+    extras.update({"maneuver_time_s": tf, "energy": energy, "min_cone_margin_deg": cone_margin_deg(case, track),
+                   "node_constraint_margin_deg": float(np.degrees(program.margin)),
+                   "max_quaternion_norm_error": float(np.abs(np.linalg.norm(nodes[:, :4], axis=1) - 1).max()),
+                   "interval_s": h, "initial_guess": spec.initial_guess, "objective_kind": spec.objective})
+    return Solution(problem=spec.name, family=spec.family, method=spec.method, status=result.status,
+                    objective=result.objective, iterations=result.iterations, size=program.size(),
+                    wall_time_s=time.perf_counter() - start, solver=spec.solver.backend, message=result.message,
+                    verification=verification,
+                    history=result.history, nodes=Trajectory(program.times(x), node_cols),
+                    dense=Trajectory(track.t, _dense_columns(case, track)), extras=extras,
+                    timing={"scp_s": result.wall_time_s, "convexify_s": result.convexify_time_s,
+                            "solver_s": result.solver_time_s, "overhead_s": result.overhead_time_s})
+
+
+def _failed(spec, result: SCPResult, program: QuaternionProgram, start: float, prefix: str) -> Solution:
+    return Solution(problem=spec.name, family=spec.family, method=spec.method, status=result.status,
+                    objective=result.objective, iterations=result.iterations, size=program.size(),
+                    wall_time_s=time.perf_counter() - start, solver=spec.solver.backend,
+                    message=prefix + result.message, history=result.history)
+
+
+def _solve_path_transfer(case: AttitudeCase, spec, start: float, extras: dict) -> Solution:
+    from convexguid.scp.problem import ProgramSize
+
+    plan = plan_path_transfer(path_transfer_problem(case))
+    breaks = plan.breakpoints_s
+    step = float(np.min(np.diff(breaks))) / 4 if breaks.size > 1 else plan.maneuver_time_s / 200
+    verification, track = verify_plan(case, case.t0 + plan.maneuver_time_s, plan.torque_at, spec.verification,
+                                      max_step=max(step, 1e-3))
+    energy = float(np.sum(np.trapezoid(track.torque**2, track.t, axis=0)))
+    extras.update({"maneuver_time_s": plan.maneuver_time_s, "planning_time_s": plan.planning_time_s,
+                   "energy": energy, "min_cone_margin_deg": cone_margin_deg(case, track),
+                   "actions": [f"{case.cones[i].name}: {a}" for i, a in enumerate(plan.actions)]})
+    return Solution(problem=spec.name, family=spec.family, method=spec.method, status="converged",
+                    objective=plan.maneuver_time_s, iterations=0, size=ProgramSize(0, 0, 0),
+                    wall_time_s=time.perf_counter() - start, solver="path_transfer",
+                    message=f"{len(plan.waypoints)} way-points", verification=verification,
+                    dense=Trajectory(track.t, _dense_columns(case, track)), extras=extras,
+                    timing={"planning_s": plan.planning_time_s})

@@ -1,0 +1,193 @@
+"""Problem family ``quaternion_attitude``: rigid-body slews under keep-out/keep-in cones, torque and rate boxes.
+
+Attitudes are scalar-last quaternions ``[x, y, z, w]`` (Hamilton product, body relative
+to inertial), or an Euler axis and angle. A quaternion whose norm is within 1e-3 of 1
+is normalised (YAML rounding); any other norm, zero included, is an error, since it is
+almost certainly a typo rather than an attitude.
+
+References
+----------
+Wang, Xu, Li, path-transfer fast planning for large-angle attitude maneuvers under
+multiple constraints (seed 003); Guo, Li, Ma 2011 (forbidden attitude, seed 001).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, PlainValidator, model_validator
+
+from convexguid.rotations import axis_angle_to_quat
+from convexguid.spec.common import (
+    Direction3,
+    InertiaMatrix,
+    KeepOutList,
+    PositiveFloat,
+    ProblemBase,
+    Reference,
+    SolverSettings,
+    SpecModel,
+    Vector3,
+    VerificationSettings,
+    readonly,
+    spec_error,
+)
+
+QUATERNION_NORM_TOL = 1e-3
+"""Largest accepted ``| |q| - 1 |`` of a YAML quaternion (it is then normalised)."""
+
+
+def _quaternion(v: object) -> tuple[float, float, float, float]:
+    hint = "give a unit quaternion [x, y, z, w] (scalar last)"
+    if not isinstance(v, (list, tuple)) or len(v) != 4:
+        raise spec_error("expected a list of 4 numbers", hint, value=v)
+    for i, x in enumerate(v):
+        if not isinstance(x, (int, float)) or isinstance(x, bool) or not math.isfinite(x):
+            raise spec_error("not a finite number", hint, key=(i,), value=x)
+    norm = math.sqrt(sum(float(x) ** 2 for x in v))
+    if abs(norm - 1.0) > QUATERNION_NORM_TOL:
+        raise spec_error(f"quaternion norm is {norm:.6g}, not 1", hint, value=list(v))
+    return tuple(float(x) / norm for x in v)  # type: ignore[return-value]
+
+
+Quaternion = Annotated[tuple[float, float, float, float], PlainValidator(_quaternion)]
+
+
+class Attitude(SpecModel):
+    """An attitude: ``quaternion`` or ``axis`` + ``angle_deg`` (rotation of the body from the inertial frame)."""
+
+    quaternion: Quaternion | None = None
+    axis: Direction3 | None = None
+    angle_deg: float | None = None
+    rate_degps: Vector3 = (0.0, 0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _one_form(self) -> Attitude:
+        by_axis = self.axis is not None or self.angle_deg is not None
+        if (self.quaternion is None) == (not by_axis) or (by_axis and (self.axis is None or self.angle_deg is None)):
+            raise spec_error("give either quaternion, or both axis and angle_deg", "e.g. quaternion: [0, 0, 0, 1]")
+        return self
+
+    @property
+    def q(self) -> np.ndarray:
+        if self.quaternion is not None:
+            return readonly(np.array(self.quaternion))
+        return readonly(axis_angle_to_quat(self.axis, math.radians(self.angle_deg)))
+
+    @property
+    def rate_radps(self) -> np.ndarray:
+        return readonly(np.radians(self.rate_degps))
+
+
+class QuaternionBoundary(SpecModel):
+    """Initial and final attitudes; ``tf_s`` for a fixed final time (energy), omitted for minimum time.
+
+    ``tf_min_time_factor``: with ``objective: energy`` and no ``tf_s``, the final time is this
+    factor times the minimum time, which is solved for first.
+    """
+
+    t0_s: float = 0.0
+    tf_s: PositiveFloat | None = None
+    tf_min_time_factor: Annotated[float, Field(gt=1.0)] | None = None
+    initial: Attitude
+    final: Attitude
+
+
+class AttitudeSpacecraft(SpecModel):
+    """Rigid body with per-axis torque and rate boxes."""
+
+    inertia_kgm2: InertiaMatrix
+    torque_max_Nm: PositiveFloat
+    rate_max_degps: PositiveFloat
+
+    @property
+    def inertia_matrix(self) -> np.ndarray:
+        return readonly(np.array(self.inertia_kgm2))
+
+
+class KeepInCone(SpecModel):
+    """``body_axis`` must stay within ``half_angle_deg`` of the inertial ``inertial_dir``."""
+
+    name: Annotated[str, Field(min_length=1)]
+    body_axis: Direction3
+    inertial_dir: Direction3
+    half_angle_deg: Annotated[float, Field(gt=0, lt=180)]
+
+
+class ForbiddenAttitude(SpecModel):
+    """The attitude must stay more than ``min_angle_deg`` (Euler-axis angle) from ``quaternion``."""
+
+    name: Annotated[str, Field(min_length=1)]
+    quaternion: Quaternion
+    min_angle_deg: Annotated[float, Field(gt=0, lt=180)]
+
+
+class HermiteSimpsonGrid(SpecModel):
+    """``intervals`` equal Hermite-Simpson intervals over the maneuver."""
+
+    method: Literal["hermite_simpson"] = "hermite_simpson"
+    intervals: Annotated[int, Field(ge=4, le=2000)] = 50
+
+
+class QuaternionAttitudeProblem(ProblemBase):
+    """A ``quaternion_attitude`` problem file (see ``problems/wang_multicone_time.yaml``)."""
+
+    family: Literal["quaternion_attitude"]
+    method: Literal["scp", "path_transfer"] = "scp"  # type: ignore[assignment]
+    spacecraft: AttitudeSpacecraft
+    boundary: QuaternionBoundary
+    keep_out: KeepOutList = ()
+    keep_in: tuple[KeepInCone, ...] = ()
+    forbidden: tuple[ForbiddenAttitude, ...] = ()
+    objective: Literal["time", "energy"] = "time"
+    initial_guess: Literal["eigenaxis", "path_transfer"] = "eigenaxis"
+    discretization: HermiteSimpsonGrid = HermiteSimpsonGrid()
+    solver: SolverSettings = SolverSettings(max_iterations=100)
+    verification: VerificationSettings = VerificationSettings()
+    reference: Reference | None = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> QuaternionAttitudeProblem:
+        b = self.boundary
+        if self.objective == "energy" and b.tf_s is None and b.tf_min_time_factor is None:
+            raise spec_error("minimum energy needs a final time", "give boundary.tf_s or boundary.tf_min_time_factor",
+                             key=("boundary",), value=None)
+        if self.objective == "time" and (b.tf_s is not None or b.tf_min_time_factor is not None):
+            raise spec_error("minimum time has a free final time", "remove boundary.tf_s / tf_min_time_factor",
+                             key=("boundary", "tf_s"), value=b.tf_s)
+        for i, cone in enumerate(self.keep_out):
+            for which in ("initial", "final"):
+                angle = _cone_angle_deg(getattr(b, which).q, cone.body_axis_unit, cone.inertial_dir_unit)
+                if angle <= cone.half_angle_deg:
+                    raise spec_error(f"the {which} attitude points {cone.name!r}'s body axis {angle:.3g} deg from "
+                                     f"its direction, inside the {cone.half_angle_deg:g} deg cone",
+                                     "move the boundary attitude or shrink the cone",
+                                     key=("keep_out", i, "half_angle_deg"), value=cone.half_angle_deg)
+        for i, keep_in in enumerate(self.keep_in):
+            axis = np.array(keep_in.body_axis) / np.linalg.norm(keep_in.body_axis)
+            d_in = np.array(keep_in.inertial_dir) / np.linalg.norm(keep_in.inertial_dir)
+            for cone in self.keep_out:
+                if not np.allclose(axis, cone.body_axis_unit):
+                    continue
+                sep = math.degrees(math.acos(np.clip(d_in @ cone.inertial_dir_unit, -1, 1)))
+                if sep + keep_in.half_angle_deg <= cone.half_angle_deg:
+                    raise spec_error(f"keep-in cone {keep_in.name!r} lies inside keep-out cone {cone.name!r}",
+                                     "the two cones leave no admissible direction; fix one of them",
+                                     key=("keep_in", i, "half_angle_deg"), value=keep_in.half_angle_deg)
+        for i, f in enumerate(self.forbidden):
+            for which in ("initial", "final"):
+                q = getattr(b, which).q
+                angle = math.degrees(2 * math.acos(min(1.0, abs(float(np.dot(q, f.quaternion))))))
+                if angle <= f.min_angle_deg:
+                    raise spec_error(f"the {which} attitude is {angle:.3g} deg from forbidden attitude {f.name!r}",
+                                     f"it must be more than {f.min_angle_deg:g} deg away",
+                                     key=("forbidden", i, "min_angle_deg"), value=f.min_angle_deg)
+        return self
+
+
+def _cone_angle_deg(q: np.ndarray, body_axis: np.ndarray, inertial_dir: np.ndarray) -> float:
+    from convexguid.rotations import quat_to_dcm
+
+    return math.degrees(math.acos(np.clip(body_axis @ quat_to_dcm(q) @ inertial_dir, -1.0, 1.0)))
