@@ -54,10 +54,10 @@ class ReferenceResult:
     Attributes
     ----------
     x : numpy.ndarray
-        Optimal decision vector: node-major Euler angles, rad (``x.reshape(-1, 3)`` rows are
-        roll, pitch, yaw).
+        Optimal decision vector in the layout of the program solved (flat attitude: node-major
+        Euler angles, rad; rendezvous arcs: the :class:`ArcLayout` vector, SI units).
     objective : float
-        Optimal energy :math:`\\sum_k w_k \\|u_k\\|^2`, N^2 m^2 s.
+        Optimal objective (flat attitude: energy, N^2 m^2 s; rendezvous: total burn time, s).
     iterations : int
         IPOPT iterations.
     status : str

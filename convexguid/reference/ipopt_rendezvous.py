@@ -41,7 +41,6 @@ control", Math. Programming Computation 11, 2019.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -49,41 +48,13 @@ import numpy as np
 from convexguid.dynamics.clohessy_wiltshire import cw_matrices
 from convexguid.formulations.rendezvous import Rendezvous
 from convexguid.formulations.rendezvous_arcs import ArcLayout, ArcsProgram
-from convexguid.reference.ipopt_flat import casadi_available
+from convexguid.reference.ipopt_flat import ReferenceResult, casadi_available
 
 __all__ = ["ArcsReferenceResult", "casadi_available", "cw_free_motion", "solve_rendezvous_arcs_ipopt"]
 
 
-@dataclass(frozen=True)
-class ArcsReferenceResult:
-    """Outcome of the IPOPT solve of the burn/coast NLP.
-
-    Attributes
-    ----------
-    x : numpy.ndarray
-        Optimal design vector in SI units, laid out as :class:`ArcLayout` (per node the state
-        in m and m/s and the unit thrust direction, then the arc durations in s).
-    objective : float
-        Total burn time :math:`\\sum T_{burn}` at ``x``, s (eq. 10).
-    status : str
-        IPOPT's ``return_status`` (e.g. ``Solve_Succeeded``).
-    success : bool
-        Whether IPOPT reports success.
-    iterations : int
-        IPOPT iterations.
-    wall_time_s : float
-        Wall time of the solve call only, s.
-    setup_time_s : float
-        Wall time of building the CasADi NLP and the IPOPT solver object, s.
-    """
-
-    x: np.ndarray
-    objective: float
-    status: str
-    success: bool
-    iterations: int
-    wall_time_s: float
-    setup_time_s: float
+ArcsReferenceResult = ReferenceResult
+"""Outcome of the arcs NLP solve: the same fields as the flat-attitude reference (``x`` in SI units, burn time)."""
 
 
 def cw_free_motion(ca: Any, mean_motion: float, state: Any, dt: Any) -> Any:
