@@ -232,8 +232,9 @@ def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_tri
     """Least-norm (scaled) ``c`` pulling the trial point back onto the nonlinear constraints.
 
     Solves :math:`\\nabla e(x)\\,c = -e(x + d)` for the equalities and the inequalities that the
-    trial point breaks, with :math:`A c = 0` for the hard linear equalities; ``None`` if the
-    corrected point would break a hard linear inequality (those are kept exactly).
+    trial point breaks, with :math:`A c = 0` for the hard linear equalities and the hard linear
+    inequalities active at the trial point kept on their bounds; ``None`` if the corrected point
+    would break another hard linear inequality (those are kept exactly).
     Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 15.6 (second-order correction).
     """
     scale = program.variable_scale()
@@ -252,6 +253,13 @@ def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_tri
         return None
     rows.append(_dense(lin.A))
     rhs.append(np.zeros(lin.A.shape[0]))
+    if lin.G.shape[0]:
+        # hard inequalities active at the trial point stay active (e.g. a torque at its bound)
+        room = lin.h - lin.G @ x_trial
+        active = room <= 1e-9 * (1 + np.abs(lin.h))
+        if active.any():
+            rows.append(_dense(lin.G)[active] if not hasattr(lin.G, "tocsr") else lin.G.tocsr()[active].toarray())
+            rhs.append(room[active])
     scaled, *_ = scipy.linalg.lstsq(np.vstack(rows) * scale, np.concatenate(rhs), lapack_driver="gelsy")
     correction = scaled * scale
     if lin.G.shape[0] and np.any(lin.G @ (x_trial + correction) - lin.h > 1e-9 * (1 + np.abs(lin.h))):
