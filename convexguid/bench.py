@@ -140,8 +140,7 @@ def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, back
     s = spec.solver
     rows = []
     for backend in backends:
-        settings = SCPSettings(backend=backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
-                               trust_region=s.trust_region, penalty=s.penalty)
+        settings = SCPSettings.from_spec(s, backend=backend)
         rows.append(_scp_row(nodes, backend, program, settings, x0, repeat))
     if not with_ipopt:
         return rows

@@ -174,8 +174,7 @@ def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
     case = build_case(spec)
     disc, s = spec.discretization, spec.solver
     program = ArcsProgram(case, disc.burns, disc.subintervals_per_burn)
-    settings = SCPSettings(backend=s.backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
-                           trust_region=s.trust_region, penalty=s.penalty)
+    settings = SCPSettings.from_spec(s)
     rows = [_lcvx_row(case, disc.grid_steps, s.backend, repeat), _scp_row(program, settings, repeat)]
     if casadi_available() if with_ipopt is None else with_ipopt:
         rows.append(_ipopt_row(program, repeat))

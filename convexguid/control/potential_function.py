@@ -46,11 +46,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from convexguid.checks import inertia_matrix, positive, unit_vector
 from convexguid.errors import SpecError
-from convexguid.rotations import quat_conjugate, quat_multiply, quat_normalize
+from convexguid.rotations import quat_conjugate, quat_multiply
 
 __all__ = [
-    "PotentialFunctionGains", "ControlInfo", "PotentialFunctionController", "error_quaternion", "inertia_spec",
+    "PotentialFunctionGains", "ControlInfo", "PotentialFunctionController", "error_quaternion",
     "attractive_potential", "barrier_offset", "repulsive_potential", "angle_to_plane",
     "guo2011_fixed_gains", "guo2011_adaptive_gains",
 ]
@@ -141,13 +142,6 @@ def angle_to_plane(a_e: NDArray, b: NDArray) -> float:
     return math.pi / 2 - math.acos(min(1.0, abs(float(a_e @ i_ob))))
 
 
-def _positive(name: str, value: float | None, allow_none: bool = False) -> None:
-    if value is None and allow_none:
-        return
-    if value is None or not math.isfinite(value) or value <= 0:
-        raise SpecError(f"PotentialFunctionGains.{name} must be a finite number > 0, got {value!r}")
-
-
 @dataclass(frozen=True)
 class PotentialFunctionGains:
     r"""Gains and limits of the potential-function controller (Guo et al. 2011, Sec. 2-3); angles in radians.
@@ -203,14 +197,15 @@ class PotentialFunctionGains:
 
     def __post_init__(self) -> None:
         for name in ("g", "s", "mu", "eta", "theta_m", "theta_0"):
-            _positive(name, getattr(self, name))
+            positive(f"PotentialFunctionGains.{name}", getattr(self, name))
         adaptive = ("u_mu", "u_s", "u_g", "mu_min", "s_max", "g_max")
         given = [name for name in adaptive if getattr(self, name) is not None]
         if given and len(given) != len(adaptive):
             missing = sorted(set(adaptive) - set(given))
             raise SpecError(f"PotentialFunctionGains: adaptive mode needs all of {adaptive}; missing {missing}")
         for name in (*adaptive, "w_max", "theta_lm", "u_max"):
-            _positive(name, getattr(self, name), allow_none=True)
+            if getattr(self, name) is not None:
+                positive(f"PotentialFunctionGains.{name}", getattr(self, name))
         if self.theta_m >= math.pi:
             raise SpecError(f"PotentialFunctionGains.theta_m must be < pi rad, got {self.theta_m!r}")
         if not self.theta_m < self.theta_0 <= math.pi:
@@ -271,22 +266,6 @@ class ControlInfo:
     u_unclipped: NDArray
 
 
-def _quaternion_spec(name: str, q: ArrayLike) -> NDArray:
-    arr = np.asarray(q, dtype=float)
-    if arr.shape != (4,) or not np.all(np.isfinite(arr)) or np.linalg.norm(arr) == 0:
-        raise SpecError(f"{name} must be a finite nonzero quaternion [x, y, z, w], got {np.asarray(q).tolist()}")
-    return quat_normalize(arr)
-
-
-def inertia_spec(inertia: ArrayLike) -> NDArray:
-    """Inertia matrix as a float array; SpecError unless it is a finite symmetric positive definite 3x3 matrix."""
-    arr = np.asarray(inertia, dtype=float)
-    if (arr.shape != (3, 3) or not np.all(np.isfinite(arr)) or not np.allclose(arr, arr.T)
-            or np.any(np.linalg.eigvalsh(arr) <= 0)):
-        raise SpecError(f"inertia must be a symmetric positive definite 3x3 matrix, got {np.asarray(inertia).tolist()}")
-    return arr
-
-
 def _ratio(num: float, den: float) -> float:
     """``num / den``, or infinity when ``den`` is zero (the bound it expresses is then inactive)."""
     return num / den if den > 0 else math.inf
@@ -319,12 +298,12 @@ class PotentialFunctionController:
 
     def __init__(self, inertia: ArrayLike, q_command: ArrayLike, gains: PotentialFunctionGains,
                  q_forbidden: ArrayLike | None = None) -> None:
-        inertia = inertia_spec(inertia)
+        inertia = inertia_matrix(inertia)
         if not isinstance(gains, PotentialFunctionGains):
             raise SpecError(f"gains must be a PotentialFunctionGains, got {type(gains).__name__}")
         self.inertia = inertia
-        self.q_command = _quaternion_spec("q_command", q_command)
-        self.q_forbidden = None if q_forbidden is None else _quaternion_spec("q_forbidden", q_forbidden)
+        self.q_command = unit_vector("q_command", q_command, 4)
+        self.q_forbidden = None if q_forbidden is None else unit_vector("q_forbidden", q_forbidden, 4)
         self.gains = gains
         # e = M q with the constant matrix of eq. 5 (error_quaternion is linear in q)
         self._m_command = error_quaternion(np.eye(4), self.q_command).T

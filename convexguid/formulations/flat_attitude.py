@@ -333,8 +333,7 @@ def solve_flat_attitude(spec, log: Callable[[IterationRecord], None] | None = No
     problem = build_problem(spec)
     program = FlatAttitudeProgram(problem)
     s = spec.solver
-    settings = SCPSettings(backend=s.backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
-                           trust_region=s.trust_region, penalty=s.penalty)
+    settings = SCPSettings.from_spec(s)
     result = solve_scp(program, settings, log)
     for _ in range(MAX_REFINEMENTS):
         worst = worst_interpolated_points(problem, result.x, spec.verification)
@@ -354,6 +353,5 @@ def solve_flat_attitude(spec, log: Callable[[IterationRecord], None] | None = No
         extras={"energy": result.objective, "max_torque_Nm": float(np.abs(u).max()),
                 "min_separation_deg": min_sep, "map_alpha": problem.grid.alpha,
                 "max_constraint_violation_nodes": result.max_violation},
-        timing={"scp_s": result.wall_time_s, "convexify_s": result.convexify_time_s,
-                "solver_s": result.solver_time_s, "overhead_s": result.overhead_time_s},
+        timing=result.timing(),
     )

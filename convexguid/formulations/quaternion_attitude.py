@@ -43,13 +43,15 @@ Guo, Li, Ma 2011 (seed 001), eq. (7): the forbidden-attitude distance.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.rotations import axis_angle_to_quat, quat_conjugate, quat_multiply, quat_rate_matrix, skew
+from convexguid.dynamics.rigid_body import euler_torque
+from convexguid.planners.path_transfer import eigenaxis_rotation
+from convexguid.rotations import axis_angle_to_quat, quat_multiply, quat_rate_matrix, skew
 from convexguid.scp.problem import (
     ConstraintBlock,
     Evaluation,
@@ -112,7 +114,6 @@ class AttitudeCase:
     cones: tuple[Cone, ...] = ()
     forbidden: tuple[Forbidden, ...] = ()
     tf: float | None = None
-    boresight_cones: tuple[Cone, ...] = field(default=(), repr=False)
 
     @cached_property
     def inertia_inv(self) -> np.ndarray:
@@ -147,9 +148,7 @@ def rigid_body_dynamics(inertia: np.ndarray, inertia_inv: np.ndarray):
 
 def eigenaxis_guess(case: AttitudeCase, times: np.ndarray) -> np.ndarray:
     """Rest-to-rest eigenaxis slew with a cubic angle profile :math:`\\Phi(3\\tau^2 - 2\\tau^3)`, as node rows."""
-    dq = quat_multiply(quat_conjugate(case.q0), case.qf)
-    angle = 2 * np.arctan2(np.linalg.norm(dq[:3]), dq[3])
-    axis = dq[:3] / np.linalg.norm(dq[:3]) if angle > 1e-12 else np.array([1.0, 0.0, 0.0])
+    axis, angle = eigenaxis_rotation(case.q0, case.qf)
     T = times[-1] - times[0]
     tau = (times - times[0]) / T
     phi = angle * (3 * tau**2 - 2 * tau**3)
@@ -157,15 +156,13 @@ def eigenaxis_guess(case: AttitudeCase, times: np.ndarray) -> np.ndarray:
     accel = angle * (6 - 12 * tau) / T**2
     q = quat_multiply(case.q0, axis_angle_to_quat(axis, phi))
     w = rate[:, None] * axis
-    u = (accel[:, None] * axis) @ case.inertia.T + np.cross(w, w @ case.inertia.T)
+    u = euler_torque(case.inertia, w, accel[:, None] * axis)
     return np.hstack([q, w, u])
 
 
 def eigenaxis_time_guess(case: AttitudeCase) -> float:
     """Duration of a rest-to-rest eigenaxis slew that roughly respects both boxes (a starting :math:`t_f`)."""
-    dq = quat_multiply(quat_conjugate(case.q0), case.qf)
-    angle = 2 * np.arctan2(np.linalg.norm(dq[:3]), abs(dq[3]))
-    axis = dq[:3] / max(np.linalg.norm(dq[:3]), 1e-12)
+    axis, angle = eigenaxis_rotation(case.q0, case.qf)
     accel = case.torque_max / max(np.abs(case.inertia @ axis).max(), 1e-12)
     rate = case.rate_max / max(np.abs(axis).max(), 1e-12)
     return float(max(2 * np.sqrt(angle / accel), 1.5 * angle / rate, 1e-3))

@@ -27,7 +27,7 @@ from convexguid.formulations.quaternion_attitude import (
 from convexguid.planners.path_transfer import PathTransferCone, PathTransferProblem, plan_path_transfer
 from convexguid.rotations import quat_angle_between
 from convexguid.scp.engine import IterationRecord, SCPResult, merge_results, solve_scp
-from convexguid.scp.problem import SCPSettings
+from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.solution import Solution, Trajectory
 from convexguid.verify import (
     AttitudeTrack,
@@ -107,15 +107,15 @@ def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[
                                                                                 Verification, AttitudeTrack]:
     """SCP with dense verification and constraint tightening (see the module docstring)."""
     s = spec.solver
-    settings = SCPSettings(backend=s.backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
-                           trust_region=s.trust_region, penalty=s.penalty)
+    settings = SCPSettings.from_spec(s)
     K = spec.discretization.intervals
     if guess_kind == "path_transfer":
         plan = plan_path_transfer(path_transfer_problem(case))
         tf_guess = case.tf or plan.maneuver_time_s
         tau = np.linspace(0.0, 1.0, K + 1)
         q, w, u = plan.sample(tau * plan.maneuver_time_s)
-        q = q * np.sign(q @ case.qf)[:, None] if plan.q[-1] @ case.qf < 0 else q
+        if plan.q[-1] @ case.qf < 0:  # the planner may end at -qf: same attitude, other sign
+            q = -q
         scale = plan.maneuver_time_s / tf_guess
         guess = np.hstack([q, w * scale, u * scale**2])
     else:
@@ -137,10 +137,21 @@ def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[
     return program, result, verification, track
 
 
+def _state_columns(q: np.ndarray, omega: np.ndarray, torque: np.ndarray) -> dict[str, np.ndarray]:
+    """CSV columns of quaternion, body rate (deg/s) and torque (N m)."""
+    cols = {f"q{i + 1}": q[:, i] for i in range(4)}
+    cols.update({f"omega{i + 1}_degps": np.degrees(omega[:, i]) for i in range(3)})
+    cols.update({f"u{i + 1}_Nm": torque[:, i] for i in range(3)})
+    return cols
+
+
+def _energy(track: AttitudeTrack) -> float:
+    """:math:`\\int |u|^2 dt` on the dense track (trapezoidal rule), N^2 m^2 s."""
+    return float(np.sum(np.trapezoid(track.torque**2, track.t, axis=0)))
+
+
 def _dense_columns(case: AttitudeCase, track: AttitudeTrack) -> dict[str, np.ndarray]:
-    cols = {f"q{i + 1}": track.q[:, i] for i in range(4)}
-    cols.update({f"omega{i + 1}_degps": np.degrees(track.omega[:, i]) for i in range(3)})
-    cols.update({f"u{i + 1}_Nm": track.torque[:, i] for i in range(3)})
+    cols = _state_columns(track.q, track.omega, track.torque)
     for c in case.cones:
         kind = "keep_out" if c.keep_out else "keep_in"
         cols[f"{kind}_{c.name}_deg"] = keep_out_angles_deg(track.q, c.body_axis, c.inertial_dir)
@@ -183,23 +194,18 @@ def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | Non
     x = result.x
     tf = program.final_time(x)
     nodes = program.nodes(x)
-    node_cols = {f"q{i + 1}": nodes[:, i] for i in range(4)}
-    node_cols.update({f"omega{i + 1}_degps": np.degrees(nodes[:, 4 + i]) for i in range(3)})
-    node_cols.update({f"u{i + 1}_Nm": nodes[:, 7 + i] for i in range(3)})
-    h = tf / program.K
-    energy = float(np.sum(np.trapezoid(track.torque**2, track.t, axis=0)))
-    extras.update({"maneuver_time_s": tf, "energy": energy, "min_cone_margin_deg": cone_margin_deg(case, track),
+    node_cols = _state_columns(nodes[:, :4], nodes[:, 4:7], nodes[:, 7:])
+    extras.update({"maneuver_time_s": tf, "energy": _energy(track), "min_cone_margin_deg": cone_margin_deg(case, track),
                    "node_constraint_margin_deg": float(np.degrees(program.margin)),
                    "max_quaternion_norm_error": float(np.abs(np.linalg.norm(nodes[:, :4], axis=1) - 1).max()),
-                   "interval_s": h, "initial_guess": spec.initial_guess, "objective_kind": spec.objective})
+                   "interval_s": tf / program.K, "initial_guess": spec.initial_guess, "objective_kind": spec.objective})
     return Solution(problem=spec.name, family=spec.family, method=spec.method, status=result.status,
                     objective=result.objective, iterations=result.iterations, size=program.size(),
                     wall_time_s=time.perf_counter() - start, solver=spec.solver.backend, message=result.message,
                     verification=verification,
                     history=result.history, nodes=Trajectory(program.times(x), node_cols),
                     dense=Trajectory(track.t, _dense_columns(case, track)), extras=extras,
-                    timing={"scp_s": result.wall_time_s, "convexify_s": result.convexify_time_s,
-                            "solver_s": result.solver_time_s, "overhead_s": result.overhead_time_s})
+                    timing=result.timing())
 
 
 def _failed(spec, result: SCPResult, program: QuaternionProgram, start: float, prefix: str) -> Solution:
@@ -210,16 +216,13 @@ def _failed(spec, result: SCPResult, program: QuaternionProgram, start: float, p
 
 
 def _solve_path_transfer(case: AttitudeCase, spec, start: float, extras: dict) -> Solution:
-    from convexguid.scp.problem import ProgramSize
-
     plan = plan_path_transfer(path_transfer_problem(case))
     breaks = plan.breakpoints_s
     step = float(np.min(np.diff(breaks))) / 4 if breaks.size > 1 else plan.maneuver_time_s / 200
     verification, track = verify_plan(case, case.t0 + plan.maneuver_time_s, plan.torque_at, spec.verification,
                                       max_step=max(step, 1e-3))
-    energy = float(np.sum(np.trapezoid(track.torque**2, track.t, axis=0)))
     extras.update({"maneuver_time_s": plan.maneuver_time_s, "planning_time_s": plan.planning_time_s,
-                   "energy": energy, "min_cone_margin_deg": cone_margin_deg(case, track),
+                   "energy": _energy(track), "min_cone_margin_deg": cone_margin_deg(case, track),
                    "actions": [f"{case.cones[i].name}: {a}" for i, a in enumerate(plan.actions)]})
     return Solution(problem=spec.name, family=spec.family, method=spec.method, status="converged",
                     objective=plan.maneuver_time_s, iterations=0, size=ProgramSize(0, 0, 0),

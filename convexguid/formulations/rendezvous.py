@@ -278,18 +278,17 @@ def _arcs_program(case: Rendezvous, spec):
 def _solve_arcs(case: Rendezvous, spec, log) -> RendezvousPlan:
     s = spec.solver
     program = _arcs_program(case, spec)
-    settings = SCPSettings(backend=s.backend, max_iterations=s.max_iterations, tolerance=s.tolerance,
-                           trust_region=s.trust_region, penalty=s.penalty)
+    settings = SCPSettings.from_spec(s)
     result = solve_scp(program, settings, log)
     states, dirs, durations = program.layout.split(result.x)
     times = program.node_times(durations)
     nodes = Trajectory(times, state_columns(case.dim, states, dirs, case.accel))
+    burns = program.burn_arcs(result.x)
     extras = {"arc_durations_s": durations.tolist(),
-              "planned_direction_norm_min": _interpolated_norm_min(times, dirs, program.burn_arcs(result.x))}
+              "planned_direction_norm_min": _interpolated_norm_min(times, dirs, burns)}
     return RendezvousPlan(result.status, result.message, result.objective, result.iterations, program.size(),
-                          program.burn_arcs(result.x), program.thrust_plan(result.x), nodes,
-                          {"scp_s": result.wall_time_s, "convexify_s": result.convexify_time_s,
-                           "solver_s": result.solver_time_s, "overhead_s": result.overhead_time_s},
+                          burns, program.thrust_plan(result.x), nodes,
+                          result.timing(),
                           extras, result.history)
 
 

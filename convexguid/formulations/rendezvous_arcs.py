@@ -43,7 +43,7 @@ from convexguid.scp.problem import (
     OutputConstraints,
     ProgramSize,
 )
-from convexguid.transcription.hermite_simpson import hermite_simpson_defects, hermite_simpson_midpoint
+from convexguid.transcription.hermite_simpson import hermite_simpson_defects
 
 
 @dataclass(frozen=True)
@@ -185,7 +185,6 @@ class ArcsProgram:
     def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
         blocks = (self._burn_defects(x, jacobians), self._coast_defects(x, jacobians),
                   self._unit_directions(x, jacobians))
-        blocks = tuple(self._scaled(b, jacobians) for b in blocks)
         return Evaluation(np.zeros(0), np.zeros((0, self.num_variables)) if jacobians else None, (), blocks)
 
     @cached_property
@@ -222,17 +221,19 @@ class ArcsProgram:
 
         return {"burn_defects": join(burn), "coast_defects": join(coast), "unit_thrust_direction": join(unit)}
 
-    def _scaled(self, block: ConstraintBlock, jacobians: bool) -> ConstraintBlock:
-        """The block in nondimensional units (defects divided by the position/velocity scales), Jacobian sparse."""
-        scale = self._state_scale if block.name != "unit_thrust_direction" else np.ones(1)
-        per_row = np.resize(1.0 / scale, block.values.size)
+    def _block(self, name: str, values: np.ndarray, jacobian_data: np.ndarray | None) -> ConstraintBlock:
+        """A constraint block in nondimensional units (defects divided by the position/velocity scales).
+
+        ``jacobian_data`` lists the Jacobian's entries in the order of :attr:`_patterns` (row-major
+        over each block of rows and its columns); the result's Jacobian is sparse with that pattern.
+        """
+        scale = self._state_scale if name != "unit_thrust_direction" else np.ones(1)
+        per_row = np.resize(1.0 / scale, values.size)
         jac = None
-        if jacobians:
-            rows, cols = self._patterns[block.name]
-            jac = sp.coo_matrix((block.jacobian[rows, cols] * per_row[rows], (rows, cols)),
-                                shape=block.jacobian.shape)
-        unit = "" if block.name == "unit_thrust_direction" else "scaled"
-        return ConstraintBlock(block.name, block.values * per_row, jac, unit)
+        if jacobian_data is not None:
+            rows, cols = self._patterns[name]
+            jac = sp.coo_matrix((jacobian_data * per_row[rows], (rows, cols)), shape=(values.size, self.num_variables))
+        return ConstraintBlock(name, values * per_row, jac, "" if name == "unit_thrust_direction" else "scaled")
 
     @cached_property
     def _state_scale(self) -> np.ndarray:
@@ -246,86 +247,70 @@ class ArcsProgram:
         :math:`U_k` along the tangent of the unit sphere (a linear model sees no cost in
         it); the other constraints' curvature is left to the trust region.
         """
-        lay = self.layout
         h = np.zeros(self.num_variables)
         lam = multipliers.get("unit_thrust_direction")
         if lam is not None:
-            for k in range(lay.num_nodes):
-                h[lay.direction_index(k)] = 2.0 * lam[k]
+            h[self._direction_columns] = 2.0 * lam[:, None]
         return h
+
+    @cached_property
+    def _direction_columns(self) -> np.ndarray:
+        """Design-vector index of every direction component, shape ``(num_nodes, nu)``."""
+        return np.array([self.layout.direction_index(k) for k in range(self.layout.num_nodes)])
 
     # --- constraint blocks -----------------------------------------------------------------------
     def _burn_defects(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
         """Hermite-Simpson defects of every burn sub-interval, eqs. (5)-(8)."""
         lay = self.layout
         states, dirs, durations = lay.split(x)
-        S, nx = lay.subintervals, lay.nx
-        values, rows = [], []
+        S = lay.subintervals
+        values, data = [], []
         for burn in range(lay.burns):
             nodes = lay.burn_nodes(burn)
             h = np.full(S, durations[lay.burn_arc(burn)] / S)
             hs = hermite_simpson_defects(self._f, self._jac, states[nodes[:-1]], dirs[nodes[:-1]],
                                          states[nodes[1:]], dirs[nodes[1:]], h)
             values.append(hs.values.ravel())
-            if not jacobians:
-                continue
-            jac = np.zeros((S * nx, self.num_variables))
-            for k in range(S):
-                r = slice(k * nx, (k + 1) * nx)
-                jac[r, lay.state_index(nodes[k])] = hs.d_x0[k]
-                jac[r, lay.direction_index(nodes[k])] = hs.d_u0[k]
-                jac[r, lay.state_index(nodes[k + 1])] = hs.d_x1[k]
-                jac[r, lay.direction_index(nodes[k + 1])] = hs.d_u1[k]
-                jac[r, lay.duration_offset + lay.burn_arc(burn)] = hs.d_h[k] / S
-            rows.append(jac)
-        return ConstraintBlock("burn_defects", np.concatenate(values), np.vstack(rows) if jacobians else None,
-                               "m, m/s")
+            # columns per sub-interval: node k (state, direction), node k+1, the burn's duration (h = T/S)
+            data.append(np.concatenate([hs.d_x0, hs.d_u0, hs.d_x1, hs.d_u1, hs.d_h[:, :, None] / S], axis=2).ravel())
+        return self._block("burn_defects", np.concatenate(values), np.concatenate(data) if jacobians else None)
 
     def _coast_defects(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
         """Coast arcs, eq. (9): :math:`\\Phi(T_c) X_{end} - X_{start}` with :math:`d\\Phi/dT = A\\Phi`."""
-        lay, n = self.layout, self.case.mean_motion
+        lay, n, dim = self.layout, self.case.mean_motion, self.case.dim
         states, _, durations = lay.split(x)
-        values, rows = [], []
+        values, data = [np.zeros(0)], [np.zeros(0)]
         for coast in range(lay.burns - 1):
             end, start = lay.burn_nodes(coast)[-1], lay.burn_nodes(coast + 1)[0]
             tc = durations[lay.coast_arc(coast)]
-            phi = cw_stm(n, tc, self.case.dim)
+            phi = cw_stm(n, tc, dim)
             values.append(phi @ states[end] - states[start])
-            if jacobians:
-                jac = np.zeros((lay.nx, self.num_variables))
-                jac[:, lay.state_index(end)] = phi
-                jac[:, lay.state_index(start)] = -np.eye(lay.nx)
-                dphi = cw_stm_derivative(n, tc, self.case.dim)
-                jac[:, lay.duration_offset + lay.coast_arc(coast)] = dphi @ states[end]
-                rows.append(jac)
-        empty = np.zeros((0, self.num_variables))
-        return ConstraintBlock("coast_defects", np.concatenate(values) if values else np.zeros(0),
-                               (np.vstack(rows) if rows else empty) if jacobians else None, "m, m/s")
+            # columns: the state ending the burn, the state starting the next one, the coast duration
+            d_tc = cw_stm_derivative(n, tc, dim) @ states[end]
+            data.append(np.hstack([phi, -np.eye(lay.nx), d_tc[:, None]]).ravel())
+        return self._block("coast_defects", np.concatenate(values), np.concatenate(data) if jacobians else None)
 
     def _unit_directions(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
         """:math:`|U_k|^2 - 1 = 0` at every node."""
-        lay = self.layout
-        _, dirs, _ = lay.split(x)
-        jac = None
-        if jacobians:
-            jac = np.zeros((lay.num_nodes, self.num_variables))
-            for k in range(lay.num_nodes):
-                jac[k, lay.direction_index(k)] = 2 * dirs[k]
-        return ConstraintBlock("unit_thrust_direction", np.sum(dirs**2, axis=1) - 1.0, jac, "")
+        _, dirs, _ = self.layout.split(x)
+        return self._block("unit_thrust_direction", np.sum(dirs**2, axis=1) - 1.0,
+                           (2 * dirs).ravel() if jacobians else None)
 
     # --- reading a solution ----------------------------------------------------------------------
     def node_times(self, durations: np.ndarray) -> np.ndarray:
         """Time of every node: burn nodes equally spaced over their arc."""
-        lay, t0 = self.layout, self.case.t0
-        starts = t0 + np.concatenate([[0.0], np.cumsum(durations)[:-1]])
+        lay, starts = self.layout, self._arc_starts(durations)
         return np.concatenate([starts[lay.burn_arc(b)] + np.linspace(0.0, durations[lay.burn_arc(b)],
                                                                        lay.nodes_per_burn)
                                for b in range(lay.burns)])
 
+    def _arc_starts(self, durations: np.ndarray) -> np.ndarray:
+        return self.case.t0 + np.concatenate([[0.0], np.cumsum(durations)[:-1]])
+
     def burn_arcs(self, x: np.ndarray) -> tuple[BurnArc, ...]:
         lay = self.layout
         _, _, durations = lay.split(x)
-        starts = self.case.t0 + np.concatenate([[0.0], np.cumsum(durations)[:-1]])
+        starts = self._arc_starts(durations)
         return tuple(BurnArc(float(starts[lay.burn_arc(b)]), float(starts[lay.burn_arc(b)]
                                                                     + durations[lay.burn_arc(b)]))
                      for b in range(lay.burns))
@@ -337,18 +322,5 @@ class ArcsProgram:
         slightly below 1 between nodes; a constant-thrust engine flies its unit vector,
         which is what the verification propagates.
         """
-        _, dirs, _ = self.layout.split(x)
-        times = self.node_times(self.layout.split(x)[2])
-        return ThrustPlan.from_nodes(times, dirs, self.burn_arcs(x), normalize=True)
-
-    def midpoints(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Hermite-Simpson midpoint states and directions of every burn sub-interval (for plots)."""
-        lay = self.layout
-        states, dirs, durations = lay.split(x)
-        mids = []
-        for burn in range(lay.burns):
-            nodes = lay.burn_nodes(burn)
-            h = np.full(lay.subintervals, durations[lay.burn_arc(burn)] / lay.subintervals)
-            mids.append(hermite_simpson_midpoint(self._f, states[nodes[:-1]], dirs[nodes[:-1]],
-                                                 states[nodes[1:]], dirs[nodes[1:]], h))
-        return np.vstack([m[0] for m in mids]), np.vstack([m[1] for m in mids])
+        _, dirs, durations = self.layout.split(x)
+        return ThrustPlan.from_nodes(self.node_times(durations), dirs, self.burn_arcs(x), normalize=True)

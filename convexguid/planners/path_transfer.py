@@ -68,6 +68,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from convexguid.checks import inertia_matrix, positive, unit_vector
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.errors import ConvexGuidError, SpecError
 from convexguid.rotations import (
@@ -93,19 +94,6 @@ _RAMP_GRID = np.linspace(0.005, 0.5, 400)
 
 class PathTransferError(ConvexGuidError, RuntimeError):
     """The walk found no circumvent arc, or needed more than ``max_actions`` actions."""
-
-
-def _vector(v: ArrayLike, size: int, what: str) -> NDArray:
-    a = np.asarray(v, dtype=float)
-    if a.shape != (size,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) < 1e-12:
-        raise SpecError(f"{what} must be a finite nonzero {size}-vector, got {np.asarray(v).tolist()}")
-    return a / np.linalg.norm(a)
-
-
-def _positive(x: float, what: str) -> float:
-    if not (np.isfinite(x) and x > 0):
-        raise SpecError(f"{what} must be a positive finite number, got {x!r}")
-    return float(x)
 
 
 def pointing_evaluation(angle: ArrayLike, half_angle: ArrayLike) -> NDArray:
@@ -139,7 +127,7 @@ def eigenaxis_path(q0: ArrayLike, qf: ArrayLike, n: int) -> NDArray:
     """
     if int(n) != n or n < 2:
         raise SpecError(f"eigenaxis_path: n must be an integer >= 2, got {n!r}")
-    q0, qf = _vector(q0, 4, "q0"), _vector(qf, 4, "qf")
+    q0, qf = unit_vector("q0", q0, 4), unit_vector("qf", qf, 4)
     axis, angle = eigenaxis_rotation(q0, qf)
     return quat_multiply(q0, axis_angle_to_quat(axis, np.linspace(0.0, angle, int(n))))
 
@@ -179,7 +167,7 @@ class PathTransferCone:
     half_angle_rad: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "inertial_dir", _vector(self.inertial_dir, 3, f"cone {self.name!r} inertial_dir"))
+        object.__setattr__(self, "inertial_dir", unit_vector(f"cone {self.name!r} inertial_dir", self.inertial_dir, 3))
         if not 0 < self.half_angle_rad < math.pi:
             raise SpecError(f"cone {self.name!r} half_angle_rad must lie in (0, pi), got {self.half_angle_rad!r}")
 
@@ -223,19 +211,16 @@ class PathTransferProblem:
     max_actions: int = 12
 
     def __post_init__(self) -> None:
-        inertia = np.asarray(self.inertia, dtype=float)
-        if inertia.shape != (3, 3) or not np.allclose(inertia, inertia.T) or np.linalg.eigvalsh(inertia)[0] <= 0:
-            raise SpecError(f"inertia must be a symmetric positive definite 3x3 matrix, got {inertia.tolist()}")
-        object.__setattr__(self, "inertia", inertia)
-        object.__setattr__(self, "boresight_body", _vector(self.boresight_body, 3, "boresight_body"))
-        object.__setattr__(self, "q0", _vector(self.q0, 4, "q0"))
-        object.__setattr__(self, "qf", _vector(self.qf, 4, "qf"))
+        object.__setattr__(self, "inertia", inertia_matrix(self.inertia))
+        object.__setattr__(self, "boresight_body", unit_vector("boresight_body", self.boresight_body, 3))
+        object.__setattr__(self, "q0", unit_vector("q0", self.q0, 4))
+        object.__setattr__(self, "qf", unit_vector("qf", self.qf, 4))
         object.__setattr__(self, "cones", tuple(self.cones))
         if not all(isinstance(c, PathTransferCone) for c in self.cones):
             raise SpecError(f"cones must be PathTransferCone instances, got {[type(c).__name__ for c in self.cones]}")
         for name in ("torque_max", "rate_max", "neighborhood_rad", "node_period_s", "node_weight",
                      "check_step_rad", "arc_step_rad"):
-            _positive(getattr(self, name), name)
+            positive(name, getattr(self, name))
         if not (np.isfinite(self.margin_rad) and self.margin_rad >= 0):
             raise SpecError(f"margin_rad must be a non-negative finite angle, got {self.margin_rad!r}")
         if self.node_weight < 1 or int(self.reference_nodes) != self.reference_nodes or self.reference_nodes < 2 \

@@ -78,6 +78,11 @@ class SCPResult:
     def overhead_time_s(self) -> float:
         return max(0.0, self.wall_time_s - self.convexify_time_s - self.solver_time_s)
 
+    def timing(self) -> dict[str, float]:
+        """The time split reported in a solution's summary (``timing``), s."""
+        return {"scp_s": self.wall_time_s, "convexify_s": self.convexify_time_s,
+                "solver_s": self.solver_time_s, "overhead_s": self.overhead_time_s}
+
 
 def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
     """:math:`f(x) = \\sum_i w_i r_i^2 + c^T x`."""
@@ -160,7 +165,7 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
         predicted = merit - (program_k.objective(res.x) + cost @ x)
         t = time.perf_counter()
         x_new = x + d
-        _, ev_new = evaluate(x_new, jacobians=False)
+        raw_new, ev_new = evaluate(x_new, jacobians=False)
         merit_new = merit_at(x_new, ev_new)
         convexify += time.perf_counter() - t
         ratio = _ratio(merit - merit_new, predicted)
@@ -169,7 +174,6 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
             # equalities, so a good step can look bad (Maratos effect); pull x_new back
             # onto e = 0 along the minimum-norm direction and judge the corrected point.
             t = time.perf_counter()
-            raw_new = program.evaluate(x_new, jacobians=False)
             correction = _second_order_correction(program, raw, raw_new, x_new)
             if correction is not None:
                 x_soc = x_new + correction
@@ -240,14 +244,12 @@ def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_tri
     scale = program.variable_scale()
     lin = program.linear_constraints()
     rows, rhs = [], []
-    for block_x, block_trial, only_violated in ([(b, t, False) for b, t in zip(at_x.equalities, at_trial.equalities,
-                                                                              strict=True)]
-                                                + [(b, t, True) for b, t in zip(at_x.inequalities,
-                                                                                at_trial.inequalities, strict=True)]):
+    pairs = [(b, t, False) for b, t in zip(at_x.equalities, at_trial.equalities, strict=True)]
+    pairs += [(b, t, True) for b, t in zip(at_x.inequalities, at_trial.inequalities, strict=True)]
+    for block_x, block_trial, only_violated in pairs:
         pick = block_trial.values > 0 if only_violated else np.ones(block_trial.values.size, bool)
         if pick.any():
-            jac = block_x.jacobian.toarray() if hasattr(block_x.jacobian, "toarray") else block_x.jacobian
-            rows.append(jac[pick])
+            rows.append(_dense(block_x.jacobian)[pick])
             rhs.append(-block_trial.values[pick])
     if not rows:
         return None
@@ -258,7 +260,7 @@ def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_tri
         room = lin.h - lin.G @ x_trial
         active = room <= 1e-9 * (1 + np.abs(lin.h))
         if active.any():
-            rows.append(_dense(lin.G)[active] if not hasattr(lin.G, "tocsr") else lin.G.tocsr()[active].toarray())
+            rows.append(_dense(lin.G)[active])
             rhs.append(room[active])
     scaled, *_ = scipy.linalg.lstsq(np.vstack(rows) * scale, np.concatenate(rhs), lapack_driver="gelsy")
     correction = scaled * scale

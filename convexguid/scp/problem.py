@@ -30,7 +30,9 @@ class ConstraintBlock:
     """A named group of nonlinear constraints and their Jacobian at the current iterate.
 
     ``values <= 0`` for inequalities, ``values == 0`` for equalities; ``unit`` is the
-    unit in which ``values`` is measured (used in diagnostics).
+    unit in which ``values`` is measured (used in diagnostics). ``jacobian`` is a dense
+    array, or a ``scipy.sparse.coo_matrix`` whose ``(row, col)`` entries are the same, in the
+    same order, at every evaluation (the subproblem's sparsity pattern is fixed once).
     """
 
     name: str
@@ -100,7 +102,13 @@ class ProgramSize:
 
 
 class NonconvexProgram(Protocol):
-    """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`."""
+    """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`.
+
+    Optional: ``lagrangian_curvature(x, multipliers) -> ndarray``, a diagonal approximation of
+    :math:`\\sum_i \\lambda_i \\nabla^2 e_i(x)` given the equality multipliers by block name
+    (negative entries are clipped to zero); the engine then adds it to the subproblem's Hessian.
+    ``A`` and ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``.
+    """
 
     num_variables: int
 
@@ -143,3 +151,10 @@ class SCPSettings:
     shrink_ratio: float = 0.25
     expand_ratio: float = 0.75
     backend_tolerance: float = 1e-8
+
+    @classmethod
+    def from_spec(cls, solver, **overrides) -> SCPSettings:
+        """Settings from a problem file's ``solver`` section (:class:`convexguid.spec.common.SolverSettings`)."""
+        values = {"backend": solver.backend, "max_iterations": solver.max_iterations, "tolerance": solver.tolerance,
+                  "trust_region": solver.trust_region, "penalty": solver.penalty}
+        return cls(**{**values, **overrides})

@@ -32,7 +32,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from convexguid.control.potential_function import ControlInfo, _cross, inertia_spec
+from convexguid.checks import finite_vector, inertia_matrix, unit_vector
+from convexguid.control.potential_function import ControlInfo, _cross
 from convexguid.errors import SpecError
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_normalize
 
@@ -176,13 +177,6 @@ class ManeuverMetrics:
     max_abs_h_w: float
 
 
-def _vector(name: str, value: ArrayLike, n: int) -> NDArray:
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)):
-        raise SpecError(f"{name} must be {n} finite numbers, got {np.asarray(value).tolist()}")
-    return arr
-
-
 def simulate(controller: AttitudeController, inertia: ArrayLike, q0: ArrayLike, omega0: ArrayLike,
              q_command: ArrayLike, t_final: float, dt: float,
              disturbance: Callable[[float], NDArray] = guo2011_disturbance,
@@ -216,10 +210,10 @@ def simulate(controller: AttitudeController, inertia: ArrayLike, q0: ArrayLike, 
     SpecError
         For invalid inputs or a ``q_command`` that differs from the controller's.
     """
-    inertia = inertia_spec(inertia)
+    inertia = inertia_matrix(inertia)
     if not (math.isfinite(dt) and math.isfinite(t_final) and 0 < dt <= t_final):
         raise SpecError(f"need 0 < dt <= t_final, got dt = {dt!r}, t_final = {t_final!r}")
-    q_command = quat_normalize(_vector("q_command", q_command, 4))
+    q_command = unit_vector("q_command", q_command, 4)
     if quat_angle_between(q_command, controller.q_command) > 1e-9:
         raise SpecError(f"q_command {q_command.tolist()} differs from the controller's "
                         f"{np.asarray(controller.q_command).tolist()}")
@@ -231,8 +225,8 @@ def simulate(controller: AttitudeController, inertia: ArrayLike, q0: ArrayLike, 
         w_dot = inertia_inv @ (u + disturbance(t) - _cross(w, inertia @ w + h))
         return np.concatenate([quaternion_rate(q, w), w_dot, -u])
 
-    y = np.concatenate([quat_normalize(_vector("q0", q0, 4)), _vector("omega0", omega0, 3),
-                        np.zeros(3) if h_w0 is None else _vector("h_w0", h_w0, 3)])
+    y = np.concatenate([unit_vector("q0", q0, 4), finite_vector("omega0", omega0, 3),
+                        np.zeros(3) if h_w0 is None else finite_vector("h_w0", h_w0, 3)])
     ys = np.empty((n_steps + 1, 10))
     us = np.empty((n_steps + 1, 3))
     infos: list[ControlInfo] = []

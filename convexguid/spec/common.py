@@ -27,6 +27,7 @@ from pydantic import (
     PlainValidator,
     PrivateAttr,
     field_validator,
+    model_validator,
 )
 from pydantic_core import PydanticCustomError
 
@@ -112,6 +113,25 @@ Vector3 = Annotated[tuple[float, float, float], PlainValidator(_vector3)]
 Direction3 = Annotated[tuple[float, float, float], PlainValidator(_direction3)]
 """A :data:`Vector3` of norm greater than 1e-12 (not normalised; see the ``*_unit`` properties)."""
 
+QUATERNION_NORM_TOL = 0.01
+"""Largest accepted :math:`|\\,\\|q\\| - 1|` of a YAML quaternion; within it the quaternion is normalised
+(papers print 3-4 digits, e.g. ``[0, 0, 0.707, 0.707]``), beyond it rejected as a typo."""
+
+
+def _unit_quaternion(v: object) -> tuple[float, float, float, float]:
+    """Four finite numbers whose norm is within :data:`QUATERNION_NORM_TOL` of 1, returned normalised."""
+    hint = (f"give a unit quaternion [x, y, z, w] (scalar last; a norm within {QUATERNION_NORM_TOL:g} of 1 is "
+            "normalised)")
+    q = _numbers(v, 4, hint)
+    norm = math.sqrt(sum(x * x for x in q))
+    if abs(norm - 1.0) > QUATERNION_NORM_TOL:
+        raise spec_error(f"quaternion norm is {norm:.6g}, not 1", hint)
+    return tuple(x / norm for x in q)  # type: ignore[return-value]
+
+
+UnitQuaternion = Annotated[tuple[float, float, float, float], PlainValidator(_unit_quaternion)]
+"""Scalar-last unit quaternion ``[x, y, z, w]`` (body relative to inertial), normalised on input."""
+
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 NonEmptyStr = Annotated[str, Field(min_length=1)]
@@ -149,6 +169,25 @@ class SpecModel(BaseModel):
     """Base of every spec model: frozen, strict, unknown keys rejected."""
 
     model_config = SPEC_CONFIG
+
+
+class TimeInterval(SpecModel):
+    """A maneuver from ``t0_s`` to ``tf_s`` (s, ``tf_s > t0_s``); boundary sections of the families extend it."""
+
+    t0_s: float = 0.0
+    tf_s: float
+
+    @model_validator(mode="after")
+    def _tf_after_t0(self) -> TimeInterval:
+        if self.tf_s <= self.t0_s:
+            raise spec_error(f"must be greater than {{here}}t0_s = {self.t0_s!r}",
+                             "give a final time after the initial time", key=("tf_s",), value=self.tf_s)
+        return self
+
+    @property
+    def duration_s(self) -> float:
+        """Maneuver duration ``tf_s - t0_s``, s."""
+        return self.tf_s - self.t0_s
 
 
 class Spacecraft(SpecModel):

@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, field_validator
 
 from convexguid.spec.common import (
     KeepOutList,
@@ -23,6 +23,7 @@ from convexguid.spec.common import (
     SolverSettings,
     Spacecraft,
     SpecModel,
+    TimeInterval,
     Vector3,
     VerificationSettings,
     readonly,
@@ -67,7 +68,7 @@ class Attitude321(SpecModel):
         return readonly(np.radians(self.rate_degps))
 
 
-class AttitudeBoundary(SpecModel):
+class AttitudeBoundary(TimeInterval):
     """Time interval and boundary attitudes.
 
     Attributes
@@ -78,22 +79,8 @@ class AttitudeBoundary(SpecModel):
         Boundary attitudes and rates.
     """
 
-    t0_s: float = 0.0
-    tf_s: float
     initial: Attitude321
     final: Attitude321
-
-    @model_validator(mode="after")
-    def _tf_after_t0(self) -> AttitudeBoundary:
-        if self.tf_s <= self.t0_s:
-            raise spec_error(f"must be greater than {{here}}t0_s = {self.t0_s!r}",
-                             "give a final time after the initial time", key=("tf_s",), value=self.tf_s)
-        return self
-
-    @property
-    def duration_s(self) -> float:
-        """Maneuver duration ``tf_s - t0_s``, s."""
-        return self.tf_s - self.t0_s
 
 
 class ChebyshevDiscretization(SpecModel):

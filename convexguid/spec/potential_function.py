@@ -8,8 +8,8 @@ the potential-function + backstepping controller of
 
 Quaternions are scalar-last ``[x, y, z, w]``, Hamilton product, body relative to inertial (the convention of
 :mod:`convexguid.rotations` and of the paper). **Non-unit input:** a quaternion whose norm is within
-:data:`QUATERNION_NORM_TOL` of 1 is normalised (papers print 3-4 digits, e.g. Table 1's ``[0, 0, 0.707, 0.707]``);
-any other norm is rejected, because it is a typo rather than rounding.
+:data:`convexguid.spec.common.QUATERNION_NORM_TOL` of 1 is normalised (papers print 3-4 digits, e.g.
+Table 1's ``[0, 0, 0.707, 0.707]``); any other norm is rejected, because it is a typo rather than rounding.
 
 Gains are *fixed* (``g``, ``s``, ``mu`` given) or *adaptive* (``u_mu_Nm``, ``u_s_Nm``, ``u_g_Nm``, ``mu_min``,
 ``s_max``, ``g_max`` given; eqs. 26-30, then ``g``, ``s``, ``mu`` must be absent). ``w_max_degps`` needs adaptive
@@ -27,7 +27,7 @@ import math
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BeforeValidator, Field, PlainValidator, model_validator
+from pydantic import BeforeValidator, Field, model_validator
 
 from convexguid.control.potential_function import PotentialFunctionGains
 from convexguid.errors import SpecError
@@ -38,14 +38,11 @@ from convexguid.spec.common import (
     Reference,
     Spacecraft,
     SpecModel,
+    UnitQuaternion,
     Vector3,
-    _numbers,
     readonly,
     spec_error,
 )
-
-QUATERNION_NORM_TOL = 0.01
-"""Largest accepted :math:`|\\,\\|q\\| - 1|`; within it a quaternion is normalised, beyond it rejected."""
 
 MAX_STEPS = 1_000_000
 """Largest accepted ``t_final_s / dt_s`` (a guard against a step size typed in the wrong unit)."""
@@ -56,20 +53,6 @@ ADAPTIVE_KEYS = ("u_mu_Nm", "u_s_Nm", "u_g_Nm", "mu_min", "s_max", "g_max")
 FIXED_KEYS = ("g", "s", "mu")
 """Gain keys of the fixed-gain controller (eq. 19)."""
 
-
-def _unit_quaternion(v: object) -> tuple[float, float, float, float]:
-    """Four finite numbers whose norm is within :data:`QUATERNION_NORM_TOL` of 1, returned normalised."""
-    hint = (f"give a unit quaternion [x, y, z, w] (scalar last; a norm within {QUATERNION_NORM_TOL:g} of 1 is "
-            "normalised)")
-    q = _numbers(v, 4, hint)
-    norm = math.sqrt(sum(x * x for x in q))
-    if abs(norm - 1.0) > QUATERNION_NORM_TOL:
-        raise spec_error(f"quaternion norm is {norm:.6g}, not 1", hint)
-    return tuple(x / norm for x in q)  # type: ignore[return-value]
-
-
-UnitQuaternion = Annotated[tuple[float, float, float, float], PlainValidator(_unit_quaternion)]
-"""Scalar-last unit quaternion (normalised on input, see the module docstring)."""
 
 AngleDeg = Annotated[float, Field(gt=0, lt=180)]
 """An angle in (0, 180) deg."""

@@ -1,9 +1,9 @@
 """Problem family ``quaternion_attitude``: rigid-body slews under keep-out/keep-in cones, torque and rate boxes.
 
 Attitudes are scalar-last quaternions ``[x, y, z, w]`` (Hamilton product, body relative
-to inertial), or an Euler axis and angle. A quaternion whose norm is within 1e-3 of 1
-is normalised (YAML rounding); any other norm, zero included, is an error, since it is
-almost certainly a typo rather than an attitude.
+to inertial), or an Euler axis and angle. A quaternion whose norm is within
+:data:`convexguid.spec.common.QUATERNION_NORM_TOL` of 1 is normalised (printed rounding); any
+other norm, zero included, is an error, since it is almost certainly a typo.
 
 References
 ----------
@@ -17,9 +17,9 @@ import math
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, PlainValidator, model_validator
+from pydantic import Field, model_validator
 
-from convexguid.rotations import axis_angle_to_quat
+from convexguid.rotations import axis_angle_to_quat, quat_angle_between
 from convexguid.spec.common import (
     Direction3,
     InertiaMatrix,
@@ -29,36 +29,19 @@ from convexguid.spec.common import (
     Reference,
     SolverSettings,
     SpecModel,
+    UnitQuaternion,
     Vector3,
     VerificationSettings,
     readonly,
     spec_error,
 )
-
-QUATERNION_NORM_TOL = 1e-3
-"""Largest accepted ``| |q| - 1 |`` of a YAML quaternion (it is then normalised)."""
-
-
-def _quaternion(v: object) -> tuple[float, float, float, float]:
-    hint = "give a unit quaternion [x, y, z, w] (scalar last)"
-    if not isinstance(v, (list, tuple)) or len(v) != 4:
-        raise spec_error("expected a list of 4 numbers", hint, value=v)
-    for i, x in enumerate(v):
-        if not isinstance(x, (int, float)) or isinstance(x, bool) or not math.isfinite(x):
-            raise spec_error("not a finite number", hint, key=(i,), value=x)
-    norm = math.sqrt(sum(float(x) ** 2 for x in v))
-    if abs(norm - 1.0) > QUATERNION_NORM_TOL:
-        raise spec_error(f"quaternion norm is {norm:.6g}, not 1", hint, value=list(v))
-    return tuple(float(x) / norm for x in v)  # type: ignore[return-value]
-
-
-Quaternion = Annotated[tuple[float, float, float, float], PlainValidator(_quaternion)]
+from convexguid.verify import keep_out_angles_deg
 
 
 class Attitude(SpecModel):
     """An attitude: ``quaternion`` or ``axis`` + ``angle_deg`` (rotation of the body from the inertial frame)."""
 
-    quaternion: Quaternion | None = None
+    quaternion: UnitQuaternion | None = None
     axis: Direction3 | None = None
     angle_deg: float | None = None
     rate_degps: Vector3 = (0.0, 0.0, 0.0)
@@ -120,7 +103,7 @@ class ForbiddenAttitude(SpecModel):
     """The attitude must stay more than ``min_angle_deg`` (Euler-axis angle) from ``quaternion``."""
 
     name: Annotated[str, Field(min_length=1)]
-    quaternion: Quaternion
+    quaternion: UnitQuaternion
     min_angle_deg: Annotated[float, Field(gt=0, lt=180)]
 
 
@@ -159,7 +142,8 @@ class QuaternionAttitudeProblem(ProblemBase):
                              key=("boundary", "tf_s"), value=b.tf_s)
         for i, cone in enumerate(self.keep_out):
             for which in ("initial", "final"):
-                angle = _cone_angle_deg(getattr(b, which).q, cone.body_axis_unit, cone.inertial_dir_unit)
+                angle = float(keep_out_angles_deg(getattr(b, which).q[None], cone.body_axis_unit,
+                                                  cone.inertial_dir_unit)[0])
                 if angle <= cone.half_angle_deg:
                     raise spec_error(f"the {which} attitude points {cone.name!r}'s body axis {angle:.3g} deg from "
                                      f"its direction, inside the {cone.half_angle_deg:g} deg cone",
@@ -179,15 +163,10 @@ class QuaternionAttitudeProblem(ProblemBase):
         for i, f in enumerate(self.forbidden):
             for which in ("initial", "final"):
                 q = getattr(b, which).q
-                angle = math.degrees(2 * math.acos(min(1.0, abs(float(np.dot(q, f.quaternion))))))
+                angle = math.degrees(float(quat_angle_between(q, f.quaternion)))
                 if angle <= f.min_angle_deg:
                     raise spec_error(f"the {which} attitude is {angle:.3g} deg from forbidden attitude {f.name!r}",
                                      f"it must be more than {f.min_angle_deg:g} deg away",
                                      key=("forbidden", i, "min_angle_deg"), value=f.min_angle_deg)
         return self
 
-
-def _cone_angle_deg(q: np.ndarray, body_axis: np.ndarray, inertial_dir: np.ndarray) -> float:
-    from convexguid.rotations import quat_to_dcm
-
-    return math.degrees(math.acos(np.clip(body_axis @ quat_to_dcm(q) @ inertial_dir, -1.0, 1.0)))

@@ -25,6 +25,7 @@ from convexguid.spec.common import (
     Reference,
     SolverSettings,
     SpecModel,
+    TimeInterval,
     readonly,
     spec_error,
 )
@@ -74,19 +75,14 @@ class RelativeState(SpecModel):
         return readonly(np.array(self.position_m + self.velocity_mps))
 
 
-class RendezvousBoundary(SpecModel):
-    """Maneuver interval and boundary states (``tf_s > t0_s``)."""
+class RendezvousBoundary(TimeInterval):
+    """Maneuver interval (``tf_s > t0_s``) and boundary states of the same dimension."""
 
-    t0_s: float = 0.0
-    tf_s: float
     initial: RelativeState
     final: RelativeState
 
     @model_validator(mode="after")
-    def _consistent(self) -> RendezvousBoundary:
-        if self.tf_s <= self.t0_s:
-            raise spec_error(f"must be greater than {{here}}t0_s = {self.t0_s!r}",
-                             "give a positive maneuver duration", key=("tf_s",), value=self.tf_s)
+    def _same_dimension(self) -> RendezvousBoundary:
         if len(self.final.position_m) != len(self.initial.position_m):
             raise spec_error(f"has {len(self.final.position_m)} components but {{here}}initial.position_m has "
                              f"{len(self.initial.position_m)}", "give both states the same dimension",
