@@ -137,6 +137,19 @@ def quat_multiply(p: ArrayLike, q: ArrayLike) -> NDArray:
     return np.concatenate([vec, pw * qw - np.sum(pv * qv, -1, keepdims=True)], -1)
 
 
+def quat_sign_continuous(q: ArrayLike) -> NDArray:
+    """Rows of ``q`` with signs flipped so that consecutive quaternions have a nonnegative dot product.
+
+    :math:`q` and :math:`-q` are the same attitude; a sampled path may jump between them, which a
+    transcription would read as a 180 deg change of its states.
+    """
+    q = np.array(q, dtype=float)
+    for k in range(1, len(q)):
+        if q[k] @ q[k - 1] < 0:
+            q[k] = -q[k]
+    return q
+
+
 def quat_to_dcm(q: ArrayLike) -> NDArray:
     r"""DCM :math:`C_{BI}` of a body-relative-to-inertial quaternion (scalar-last, normalised first).
 

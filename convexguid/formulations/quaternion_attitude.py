@@ -27,12 +27,16 @@ propagates the true dynamics and renormalizes.
 **Constraints.** Torque and rate boxes at the nodes (the torque is interpolated linearly
 between nodes, so its box holds everywhere); keep-out cones
 :math:`b^T C_{BI}(q_k) r \\le \\cos(\\theta + m)` and keep-in cones
-:math:`b^T C_{BI}(q_k) r \\ge \\cos(\\alpha - m)` at the nodes, with a margin :math:`m` that
+:math:`b^T C_{BI}(q_k) r \\ge \\cos(\\alpha - m)` at the nodes and at the Hermite-Simpson
+interval midpoints (the rate box too, at the midpoints), with a margin :math:`m` that
 is raised when the dense check finds the path cutting a cone's edge between nodes; the
 forbidden attitude :math:`|q_b \\cdot q_k| \\le \\cos((\\theta_m + m)/2)`, two linear rows per node.
 
 **Objectives.** Minimum time (:math:`\\min t_f`) or minimum energy at fixed :math:`t_f`
 (:math:`\\int |u|^2 dt` by Simpson's rule on the linear torque, as least-squares residuals).
+The objective's value at the initial guess (``objective_scale``) sets the unit of the
+exact-penalty weight (``scp_settings`` in :mod:`convexguid.formulations.quaternion_attitude_solve`),
+so one weight serves a 0.04 N^2 m^2 s energy and a 100 s slew alike.
 
 References
 ----------
@@ -180,6 +184,8 @@ class QuaternionProgram:
         self._guess = np.concatenate([guess.ravel(), [tf_guess] if self.free_time else []])
         self._tf_guess = tf_guess
         self._f, self._jac = rigid_body_dynamics(case.inertia, case.inertia_inv)
+        self._patterns: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self.objective_scale = tf_guess if self.free_time else self._guess_energy(guess)
 
     # --- layout ---
     def nodes(self, x: np.ndarray) -> np.ndarray:
@@ -226,13 +232,19 @@ class QuaternionProgram:
             r += 3
         return sp.coo_matrix((vals, (rows, cols)), shape=(r, self.num_variables))
 
-    def residual_weights(self) -> np.ndarray:
-        if self.free_time:
-            return np.zeros(0)
+    def _simpson_weights(self) -> np.ndarray:
         h = self.case.tf / self.K
         node_w = np.full(self.num_nodes, 2 * h / 6)
         node_w[[0, -1]] = h / 6
         return np.concatenate([np.repeat(node_w, 3), np.full(3 * self.K, 4 * h / 6)])
+
+    def _guess_energy(self, guess: np.ndarray) -> float:
+        """Energy of the initial guess (at least 1e-3 of the energy with every torque at its bound)."""
+        energy = float(self._simpson_weights() @ (self._energy_rows @ guess.ravel()) ** 2)
+        return max(energy, 1e-3 * 3 * self.case.torque_max**2 * self.case.tf)
+
+    def residual_weights(self) -> np.ndarray:
+        return np.zeros(0) if self.free_time else self._simpson_weights()
 
     def linear_cost(self) -> np.ndarray:
         c = np.zeros(self.num_variables)
@@ -277,8 +289,8 @@ class QuaternionProgram:
 
     def size(self) -> ProgramSize:
         lin = self.linear_constraints()
-        n_cone = self.num_nodes * len(self.case.cones)
-        return ProgramSize(self.num_variables, lin.A.shape[0] + NX * self.K, lin.G.shape[0] + n_cone)
+        n_path = (self.num_nodes + self.K) * len(self.case.cones) + 6 * self.K
+        return ProgramSize(self.num_variables, lin.A.shape[0] + NX * self.K, lin.G.shape[0] + n_path)
 
     def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
         nodes = self.nodes(x)
@@ -286,57 +298,84 @@ class QuaternionProgram:
             residuals, res_jac = np.zeros(0), sp.coo_matrix((0, self.num_variables))
         else:
             residuals, res_jac = self._energy_rows @ x, self._energy_rows
-        return Evaluation(residuals, res_jac if jacobians else None, self._cone_blocks(nodes, jacobians),
-                          (self._defects(x, nodes, jacobians),))
+        K, tf = self.K, self.final_time(x)
+        xs, us = nodes[:, :NX], nodes[:, NX:]
+        hs = hermite_simpson_defects(self._f, self._jac, xs[:-1], us[:-1], xs[1:], us[1:], np.full(K, tf / K))
+        mid = hs.midpoint
+        mid_jac = self._interval_local(mid) if jacobians else None
+        inequalities = self._cone_blocks(nodes[:, :4], mid.values[:, :4], mid_jac, jacobians)
+        inequalities += (self._midpoint_rate_block(mid.values[:, 4:], mid_jac, jacobians),)
+        return Evaluation(residuals, res_jac if jacobians else None, inequalities, (self._defects(hs, jacobians),))
 
     # --- constraint blocks ---
-    @cached_property
-    def _defect_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+    def _interval_local(self, parts) -> np.ndarray:
+        """Per-interval Jacobian ``(K, rows, cols)`` over [node k, node k+1, t_f] from HS partials ``parts``."""
+        blocks = [np.concatenate([parts.d_x0, parts.d_u0, parts.d_x1, parts.d_u1], axis=2)]
+        if self.free_time:
+            blocks.append(parts.d_h[:, :, None] / self.K)
+        return np.concatenate(blocks, axis=2)
+
+    def _interval_pattern(self, rows_per_interval: int) -> tuple[np.ndarray, np.ndarray]:
+        """(row, col) of ``rows_per_interval`` rows per interval touching nodes k, k+1 and t_f (cached)."""
+        if rows_per_interval in self._patterns:
+            return self._patterns[rows_per_interval]
         rows, cols = [], []
         for k in range(self.K):
             c = np.concatenate([self._cols(k, slice(None)), self._cols(k + 1, slice(None)),
                                 [self.num_variables - 1] if self.free_time else []]).astype(int)
-            r, cc = np.meshgrid(k * NX + np.arange(NX), c, indexing="ij")
+            r, cc = np.meshgrid(k * rows_per_interval + np.arange(rows_per_interval), c, indexing="ij")
             rows.append(r.ravel())
             cols.append(cc.ravel())
-        return np.concatenate(rows), np.concatenate(cols)
+        self._patterns[rows_per_interval] = np.concatenate(rows), np.concatenate(cols)
+        return self._patterns[rows_per_interval]
+
+    def _interval_matrix(self, local: np.ndarray) -> sp.coo_matrix:
+        rows, cols = self._interval_pattern(local.shape[1])
+        return sp.coo_matrix((local.ravel(), (rows, cols)), shape=(self.K * local.shape[1], self.num_variables))
 
     @cached_property
     def _defect_scale(self) -> np.ndarray:
         return np.tile(1.0 / np.concatenate([np.ones(4), np.full(3, self.case.rate_max)]), self.K)
 
-    def _defects(self, x: np.ndarray, nodes: np.ndarray, jacobians: bool) -> ConstraintBlock:
+    def _defects(self, hs, jacobians: bool) -> ConstraintBlock:
         """Hermite-Simpson defects, scaled by the state scales (quaternion 1, rate ``rate_max``)."""
-        K, tf = self.K, self.final_time(x)
-        xs, us = nodes[:, :NX], nodes[:, NX:]
-        hs = hermite_simpson_defects(self._f, self._jac, xs[:-1], us[:-1], xs[1:], us[1:], np.full(K, tf / K))
         values = hs.values.ravel() * self._defect_scale
         jac = None
         if jacobians:
-            blocks = [np.concatenate([hs.d_x0, hs.d_u0, hs.d_x1, hs.d_u1], axis=2)]
-            if self.free_time:
-                blocks.append(hs.d_h[:, :, None] / K)
-            local = np.concatenate(blocks, axis=2) * self._defect_scale.reshape(K, NX, 1)
-            rows, cols = self._defect_pattern
-            jac = sp.coo_matrix((local.ravel(), (rows, cols)), shape=(K * NX, self.num_variables))
+            jac = self._interval_matrix(self._interval_local(hs) * self._defect_scale.reshape(self.K, NX, 1))
         return ConstraintBlock("dynamics_defects", values, jac, "scaled")
 
-    def _cone_blocks(self, nodes: np.ndarray, jacobians: bool) -> tuple[ConstraintBlock, ...]:
+    def _midpoint_rate_block(self, w_mid: np.ndarray, mid_jac: np.ndarray | None, jacobians: bool) -> ConstraintBlock:
+        """The rate box at the interval midpoints, :math:`\\pm\\omega_c/\\omega_{max} - 1 \\le 0` (nodes: hard rows)."""
+        w_max = self.case.rate_max
+        values = np.concatenate([w_mid, -w_mid], axis=1).ravel() / w_max - 1.0
+        jac = None
+        if jacobians:
+            d_w = mid_jac[:, 4:7, :] / w_max
+            jac = self._interval_matrix(np.concatenate([d_w, -d_w], axis=1))
+        return ConstraintBlock("rate_midpoints", values, jac, "of rate_max")
+
+    def _cone_blocks(self, q: np.ndarray, q_mid: np.ndarray, mid_jac: np.ndarray | None,
+                     jacobians: bool) -> tuple[ConstraintBlock, ...]:
+        """Each cone at the nodes and at the interval midpoints (values in cosine units)."""
         blocks = []
-        q = nodes[:, :4]
         n1 = self.num_nodes
         rows = np.repeat(np.arange(n1), 4)
         cols = (np.arange(n1)[:, None] * NODE + np.arange(4)).ravel()
         for cone in self.case.cones:
-            c, grad = cone.cos_angle(q)
+            kind = "keep_out" if cone.keep_out else "keep_in"
             if cone.keep_out:
-                values, sign = c - np.cos(min(np.pi, cone.half_angle + self.margin)), 1.0
+                bound, sign = np.cos(min(np.pi, cone.half_angle + self.margin)), 1.0
             else:
-                values, sign = np.cos(max(0.0, cone.half_angle - self.margin)) - c, -1.0
-            jac = sp.coo_matrix((sign * grad.ravel(), (rows, cols)), shape=(n1, self.num_variables)) \
-                if jacobians else None
-            blocks.append(ConstraintBlock(f"{'keep_out' if cone.keep_out else 'keep_in'}_{cone.name}", values, jac,
-                                          "cos"))
+                bound, sign = np.cos(max(0.0, cone.half_angle - self.margin)), -1.0
+            c, grad = cone.cos_angle(q)
+            c_mid, grad_mid = cone.cos_angle(q_mid)
+            jac = jac_mid = None
+            if jacobians:
+                jac = sp.coo_matrix((sign * grad.ravel(), (rows, cols)), shape=(n1, self.num_variables))
+                jac_mid = self._interval_matrix(sign * np.einsum("kj,kjc->kc", grad_mid, mid_jac[:, :4, :])[:, None])
+            blocks.append(ConstraintBlock(f"{kind}_{cone.name}", sign * (c - bound), jac, "cos"))
+            blocks.append(ConstraintBlock(f"{kind}_{cone.name}_midpoints", sign * (c_mid - bound), jac_mid, "cos"))
         return tuple(blocks)
 
     # --- reading a solution ---

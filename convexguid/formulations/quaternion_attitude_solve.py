@@ -25,7 +25,7 @@ from convexguid.formulations.quaternion_attitude import (
     eigenaxis_time_guess,
 )
 from convexguid.planners.path_transfer import PathTransferCone, PathTransferProblem, plan_path_transfer
-from convexguid.rotations import quat_angle_between
+from convexguid.rotations import quat_angle_between, quat_sign_continuous
 from convexguid.scp.engine import IterationRecord, SCPResult, merge_results, solve_scp
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.solution import Solution, Trajectory
@@ -100,29 +100,44 @@ def _tightened(program: QuaternionProgram, x: np.ndarray, verification: Verifica
     tight_case = program.case
     if rate is not None and rate.violation > 0:
         tight_case = replace(tight_case, rate_max=tight_case.rate_max - np.radians(rate.violation) * 1.5)
-    return QuaternionProgram(tight_case, program.K, program.nodes(x), program.final_time(x), margin)
+    nodes = program.nodes(x).copy()
+    # start inside the tightened rate box: its rows are hard, the trust region could not reach them
+    nodes[:, 4:7] = np.clip(nodes[:, 4:7], -tight_case.rate_max, tight_case.rate_max)
+    return QuaternionProgram(tight_case, program.K, nodes, program.final_time(x), margin)
+
+
+PENALTY_RANGE = 1e4
+"""How far the SCP may raise its penalty weight above the starting one when iterates stall infeasible."""
+
+
+def scp_settings(solver, program: QuaternionProgram) -> SCPSettings:
+    """The spec's SCP settings, with the penalty weight counted in units of the objective at the guess.
+
+    A weight of 30 then means "30 times the guess's maneuver time (or energy) per unit of
+    scaled constraint violation" for every case, however its torque, inertia or time scale.
+    """
+    penalty = solver.penalty * program.objective_scale
+    return SCPSettings.from_spec(solver, penalty=penalty, penalty_max=PENALTY_RANGE * penalty)
 
 
 def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[QuaternionProgram, SCPResult,
                                                                                 Verification, AttitudeTrack]:
     """SCP with dense verification and constraint tightening (see the module docstring)."""
-    s = spec.solver
-    settings = SCPSettings.from_spec(s)
     K = spec.discretization.intervals
     if guess_kind == "path_transfer":
         plan = plan_path_transfer(path_transfer_problem(case))
         tf_guess = case.tf or plan.maneuver_time_s
-        tau = np.linspace(0.0, 1.0, K + 1)
-        q, w, u = plan.sample(tau * plan.maneuver_time_s)
-        if plan.q[-1] @ case.qf < 0:  # the planner may end at -qf: same attitude, other sign
-            q = -q
+        q, w, u = plan.sample(np.linspace(0.0, 1.0, K + 1) * plan.maneuver_time_s)
+        q = quat_sign_continuous(q)
+        if q[-1] @ case.qf < 0:  # the path ends at -qf: the same attitude, reached the other way round
+            case = replace(case, qf=-case.qf)
         scale = plan.maneuver_time_s / tf_guess
         guess = np.hstack([q, w * scale, u * scale**2])
     else:
         tf_guess = case.tf or eigenaxis_time_guess(case)
         guess = eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf_guess, K + 1))
     program = QuaternionProgram(case, K, guess, tf_guess)
-    result = solve_scp(program, settings, log)
+    result = solve_scp(program, scp_settings(spec.solver, program), log)
     for _ in range(MAX_TIGHTENINGS + 1):
         tf = program.final_time(result.x)
         verification, track = verify_plan(case, case.t0 + tf, program.torque_command(result.x), spec.verification,
@@ -133,7 +148,7 @@ def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[
         if tighter is None:
             break
         program = tighter
-        result = merge_results(result, solve_scp(program, settings, log, x0=result.x))
+        result = merge_results(result, solve_scp(program, scp_settings(spec.solver, program), log))
     return program, result, verification, track
 
 

@@ -35,7 +35,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-import scipy.linalg
 
 from convexguid.backends import make_backend
 from convexguid.scp.assembly import SubproblemAssembler
@@ -171,18 +170,22 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
         ratio = _ratio(merit - merit_new, predicted)
         if ratio < settings.expand_ratio and (raw.equalities or raw.inequalities):
             # Second-order correction: the linear model cannot see the curvature of the
-            # equalities, so a good step can look bad (Maratos effect); pull x_new back
-            # onto e = 0 along the minimum-norm direction and judge the corrected point.
-            t = time.perf_counter()
-            correction = _second_order_correction(program, raw, raw_new, x_new)
-            if correction is not None:
-                x_soc = x_new + correction
+            # constraints, so a good step can look bad (Maratos effect). Re-solve the same
+            # subproblem with each constraint's constant shifted to what the trial point
+            # showed, and judge the corrected step against the original prediction.
+            backend.update(assembler.build(x, _shifted_constants(raw, raw_new, d), radius, rho, hessian))
+            res_soc = backend.solve()
+            solver_time += res_soc.solve_time_s
+            if res_soc.usable:
+                t = time.perf_counter()
+                x_soc = x + assembler.step(res_soc.x)
                 _, ev_soc = evaluate(x_soc, jacobians=False)
                 merit_soc = merit_at(x_soc, ev_soc)
-                if _ratio(merit - merit_soc, predicted) > ratio:
-                    x_new, ev_new, merit_new = x_soc, ev_soc, merit_soc
-                    ratio = _ratio(merit - merit_new, predicted)
-            convexify += time.perf_counter() - t
+                convexify += time.perf_counter() - t
+                ratio_soc = _ratio(merit - merit_soc, predicted)
+                if ratio_soc > ratio:
+                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
+                    d = x_new - x
         step = float(np.max(np.abs(d) / program.variable_scale()))
         accepted = ratio >= settings.accept_ratio
         if accepted:
@@ -231,46 +234,22 @@ def _ratio(actual: float, predicted: float) -> float:
     return actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
 
 
-def _second_order_correction(program: NonconvexProgram, at_x: Evaluation, at_trial: Evaluation,
-                             x_trial: np.ndarray) -> np.ndarray | None:
-    """Least-norm (scaled) ``c`` pulling the trial point back onto the nonlinear constraints.
+def _shifted_constants(at_x: Evaluation, at_trial: Evaluation, d: np.ndarray) -> Evaluation:
+    """Constraint blocks at ``x`` whose values are :math:`c(x + d) - \\nabla c(x)\\, d` (Jacobians kept).
 
-    Solves :math:`\\nabla e(x)\\,c = -e(x + d)` for the equalities and the inequalities that the
-    trial point breaks, with :math:`A c = 0` for the hard linear equalities and the hard linear
-    inequalities active at the trial point kept on their bounds; ``None`` if the corrected point
-    would break another hard linear inequality (those are kept exactly).
-    Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 15.6 (second-order correction).
+    Linearizing these about ``x`` gives :math:`c(x + d) + \\nabla c(x)(d' - d)`: the subproblem
+    solved again with them (Fletcher's second-order correction) steers the new step ``d'`` so
+    that the curvature error seen at the trial point is cancelled to first order.
+    Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 15.6; Fletcher, *Practical Methods
+    of Optimization*, 2nd ed., Sec. 14.4.
     """
-    scale = program.variable_scale()
-    lin = program.linear_constraints()
-    rows, rhs = [], []
-    pairs = [(b, t, False) for b, t in zip(at_x.equalities, at_trial.equalities, strict=True)]
-    pairs += [(b, t, True) for b, t in zip(at_x.inequalities, at_trial.inequalities, strict=True)]
-    for block_x, block_trial, only_violated in pairs:
-        pick = block_trial.values > 0 if only_violated else np.ones(block_trial.values.size, bool)
-        if pick.any():
-            rows.append(_dense(block_x.jacobian)[pick])
-            rhs.append(-block_trial.values[pick])
-    if not rows:
-        return None
-    rows.append(_dense(lin.A))
-    rhs.append(np.zeros(lin.A.shape[0]))
-    if lin.G.shape[0]:
-        # hard inequalities active at the trial point stay active (e.g. a torque at its bound)
-        room = lin.h - lin.G @ x_trial
-        active = room <= 1e-9 * (1 + np.abs(lin.h))
-        if active.any():
-            rows.append(_dense(lin.G)[active])
-            rhs.append(room[active])
-    scaled, *_ = scipy.linalg.lstsq(np.vstack(rows) * scale, np.concatenate(rhs), lapack_driver="gelsy")
-    correction = scaled * scale
-    if lin.G.shape[0] and np.any(lin.G @ (x_trial + correction) - lin.h > 1e-9 * (1 + np.abs(lin.h))):
-        return None
-    return correction
 
+    def shift(blocks_x, blocks_trial):
+        return tuple(replace(bx, values=bt.values - bx.jacobian @ d) for bx, bt in zip(blocks_x, blocks_trial,
+                                                                                      strict=True))
 
-def _dense(matrix) -> np.ndarray:
-    return matrix.toarray() if hasattr(matrix, "toarray") else np.asarray(matrix)
+    return replace(at_x, inequalities=shift(at_x.inequalities, at_trial.inequalities),
+                   equalities=shift(at_x.equalities, at_trial.equalities))
 
 
 def _split_by_block(values: np.ndarray, ev: Evaluation) -> dict[str, np.ndarray]:

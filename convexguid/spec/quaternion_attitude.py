@@ -17,7 +17,7 @@ import math
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between
 from convexguid.spec.common import (
@@ -114,6 +114,10 @@ class HermiteSimpsonGrid(SpecModel):
     intervals: Annotated[int, Field(ge=4, le=2000)] = 50
 
 
+FAMILY_PENALTY = 30.0
+"""Default exact-penalty weight, in units of the objective at the initial guess (the SCP scales it)."""
+
+
 class QuaternionAttitudeProblem(ProblemBase):
     """A ``quaternion_attitude`` problem file (see ``problems/wang_multicone_time.yaml``)."""
 
@@ -127,9 +131,15 @@ class QuaternionAttitudeProblem(ProblemBase):
     objective: Literal["time", "energy"] = "time"
     initial_guess: Literal["eigenaxis", "path_transfer"] = "eigenaxis"
     discretization: HermiteSimpsonGrid = HermiteSimpsonGrid()
-    solver: SolverSettings = SolverSettings(max_iterations=100)
+    solver: SolverSettings = SolverSettings(max_iterations=100, penalty=FAMILY_PENALTY)
     verification: VerificationSettings = VerificationSettings()
     reference: Reference | None = None
+
+    @field_validator("solver", mode="before")
+    @classmethod
+    def _family_solver_defaults(cls, value):
+        """Keys a file leaves out of ``solver`` take this family's defaults, not the generic ones."""
+        return {"max_iterations": 100, "penalty": FAMILY_PENALTY, **value} if isinstance(value, dict) else value
 
     @model_validator(mode="after")
     def _consistent(self) -> QuaternionAttitudeProblem:

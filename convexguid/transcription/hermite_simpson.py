@@ -43,6 +43,30 @@ DynamicsJacobian = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarr
 
 
 @dataclass(frozen=True)
+class HermiteSimpsonMidpoint:
+    """Midpoint states :math:`x_c` of ``K`` intervals and their partial derivatives (same layout as the defects).
+
+    .. math::
+
+        \\partial x_c/\\partial x_0 = \\tfrac12 I + \\tfrac{h}{8}F_0, \\quad
+        \\partial x_c/\\partial x_1 = \\tfrac12 I - \\tfrac{h}{8}F_1, \\quad
+        \\partial x_c/\\partial u_0 = \\tfrac{h}{8}G_0, \\quad
+        \\partial x_c/\\partial u_1 = -\\tfrac{h}{8}G_1, \\quad
+        \\partial x_c/\\partial h = \\tfrac18 (f_0 - f_1).
+
+    Constraining a path function at :math:`x_c` as well as at the nodes halves the gap in
+    which the interpolated trajectory is unchecked.
+    """
+
+    values: np.ndarray
+    d_x0: np.ndarray
+    d_u0: np.ndarray
+    d_x1: np.ndarray
+    d_u1: np.ndarray
+    d_h: np.ndarray
+
+
+@dataclass(frozen=True)
 class HermiteSimpsonDefects:
     """Defects :math:`\\zeta_k` of ``K`` intervals and their partial derivatives.
 
@@ -56,6 +80,7 @@ class HermiteSimpsonDefects:
     d_x1: np.ndarray
     d_u1: np.ndarray
     d_h: np.ndarray
+    midpoint: HermiteSimpsonMidpoint
 
 
 def hermite_simpson_midpoint(f: Dynamics, x0: np.ndarray, u0: np.ndarray, x1: np.ndarray, u1: np.ndarray,
@@ -96,4 +121,6 @@ def hermite_simpson_defects(f: Dynamics, jac: DynamicsJacobian, x0: np.ndarray, 
     d_u0 = -hh / 6 * (G0 + 4 * (hh / 8 * Fc @ G0 + 0.5 * Gc))
     d_u1 = -hh / 6 * (G1 + 4 * (-hh / 8 * Fc @ G1 + 0.5 * Gc))
     d_h = -(f0 + 4 * fc + f1) / 6 - h[:, None] / 12 * np.einsum("kij,kj->ki", Fc, f0 - f1)
-    return HermiteSimpsonDefects(values, d_x0, d_u0, d_x1, d_u1, d_h)
+    midpoint = HermiteSimpsonMidpoint(xc, 0.5 * eye + hh / 8 * F0, hh / 8 * G0, 0.5 * eye - hh / 8 * F1, -hh / 8 * G1,
+                                      (f0 - f1) / 8)
+    return HermiteSimpsonDefects(values, d_x0, d_u0, d_x1, d_u1, d_h, midpoint)
