@@ -30,7 +30,7 @@ between nodes, so its box holds everywhere); keep-out cones
 :math:`b^T C_{BI}(q_k) r \\ge \\cos(\\alpha - m)` at the nodes and at the Hermite-Simpson
 interval midpoints (the rate box too, at the midpoints), with a margin :math:`m` that
 is raised when the dense check finds the path cutting a cone's edge between nodes; the
-forbidden attitude :math:`|q_b \\cdot q_k| \\le \\cos((\\theta_m + m)/2)`, two linear rows per node.
+forbidden attitude :math:`|q_b \\cdot q| \\le \\cos((\\theta_m + m)/2)`, two rows per node and midpoint.
 
 **Objectives.** Minimum time (:math:`\\min t_f`) or minimum energy at fixed :math:`t_f`
 (:math:`\\int |u|^2 dt` by Simpson's rule on the linear torque, as least-squares residuals).
@@ -267,13 +267,6 @@ class QuaternionProgram:
                     g[np.arange(3), self._cols(k, part)] = sign
                     rows.append(g)
                     h.append(np.full(3, bound))
-            for fb in c.forbidden:
-                bound = np.cos(min(np.pi, fb.min_angle + self.margin) / 2)
-                for sign in (1.0, -1.0):
-                    g = np.zeros((1, n))
-                    g[0, self._cols(k, slice(0, 4))] = sign * fb.q
-                    rows.append(g)
-                    h.append([bound])
         if self.free_time:
             g = np.zeros((1, n))
             g[0, -1] = -1.0
@@ -289,7 +282,7 @@ class QuaternionProgram:
 
     def size(self) -> ProgramSize:
         lin = self.linear_constraints()
-        n_path = (self.num_nodes + self.K) * len(self.case.cones) + 6 * self.K
+        n_path = (self.num_nodes + self.K) * (len(self.case.cones) + 2 * len(self.case.forbidden)) + 6 * self.K
         return ProgramSize(self.num_variables, lin.A.shape[0] + NX * self.K, lin.G.shape[0] + n_path)
 
     def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
@@ -304,6 +297,7 @@ class QuaternionProgram:
         mid = hs.midpoint
         mid_jac = self._interval_local(mid) if jacobians else None
         inequalities = self._cone_blocks(nodes[:, :4], mid.values[:, :4], mid_jac, jacobians)
+        inequalities += self._forbidden_blocks(nodes[:, :4], mid.values[:, :4], mid_jac, jacobians)
         inequalities += (self._midpoint_rate_block(mid.values[:, 4:], mid_jac, jacobians),)
         return Evaluation(residuals, res_jac if jacobians else None, inequalities, (self._defects(hs, jacobians),))
 
@@ -354,6 +348,33 @@ class QuaternionProgram:
             d_w = mid_jac[:, 4:7, :] / w_max
             jac = self._interval_matrix(np.concatenate([d_w, -d_w], axis=1))
         return ConstraintBlock("rate_midpoints", values, jac, "of rate_max")
+
+    def _forbidden_blocks(self, q: np.ndarray, q_mid: np.ndarray, mid_jac: np.ndarray | None,
+                          jacobians: bool) -> tuple[ConstraintBlock, ...]:
+        """:math:`\\pm q_b \\cdot q - \\cos((\\theta_m + m)/2) \\le 0` per forbidden attitude, nodes and midpoints.
+
+        Linear in :math:`q`, but penalized like the cones rather than hard: an initial guess may pass
+        through the forbidden attitude (the eigenaxis slew of Guo et al.'s case does), and a hard row
+        would make the first subproblem infeasible inside the trust region.
+        """
+        blocks = []
+        n1 = self.num_nodes
+        rows = np.repeat(np.arange(2 * n1), 4)
+        cols = np.tile(np.arange(n1)[:, None] * NODE + np.arange(4), (2, 1)).ravel()
+        for fb in self.case.forbidden:
+            bound = np.cos(min(np.pi, fb.min_angle + self.margin) / 2)
+            signed = np.array([1.0, -1.0])
+            values = (signed[:, None] * (q @ fb.q)[None, :]).ravel() - bound
+            values_mid = (signed[None, :] * (q_mid @ fb.q)[:, None]).ravel() - bound
+            jac = jac_mid = None
+            if jacobians:
+                jac = sp.coo_matrix((np.outer(np.repeat(signed, n1), fb.q).ravel(), (rows, cols)),
+                                    shape=(2 * n1, self.num_variables))
+                d_dot = np.einsum("j,kjc->kc", fb.q, mid_jac[:, :4, :])
+                jac_mid = self._interval_matrix(signed[None, :, None] * d_dot[:, None, :])
+            blocks.append(ConstraintBlock(f"forbidden_{fb.name}", values, jac, "cos"))
+            blocks.append(ConstraintBlock(f"forbidden_{fb.name}_midpoints", values_mid, jac_mid, "cos"))
+        return tuple(blocks)
 
     def _cone_blocks(self, q: np.ndarray, q_mid: np.ndarray, mid_jac: np.ndarray | None,
                      jacobians: bool) -> tuple[ConstraintBlock, ...]:

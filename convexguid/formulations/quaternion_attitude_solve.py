@@ -191,11 +191,17 @@ def eigenaxis_cone_clearance(case: AttitudeCase, samples: int = 721) -> dict[str
     return {c.name: float(keep_out_angles_deg(q, c.body_axis, c.inertial_dir).min()) for c in case.cones if c.keep_out}
 
 
+def cone_geometry(case: AttitudeCase) -> list[dict]:
+    """The cones as plain data for the summary and the sky plots."""
+    return [{"name": c.name, "body_axis": c.body_axis.tolist(), "inertial_dir": c.inertial_dir.tolist(),
+             "half_angle_deg": float(np.degrees(c.half_angle)), "keep_out": c.keep_out} for c in case.cones]
+
+
 def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
     """Plan with ``spec.method`` (``scp`` or ``path_transfer``), verify, and summarise."""
     start = time.perf_counter()
     case = build_case(spec)
-    extras: dict = {"eigenaxis_min_angle_deg": eigenaxis_cone_clearance(case)}
+    extras: dict = {"eigenaxis_min_angle_deg": eigenaxis_cone_clearance(case), "cones": cone_geometry(case)}
     if spec.method == "path_transfer":
         return _solve_path_transfer(case, spec, start, extras)
     if spec.objective == "energy" and case.tf is None:

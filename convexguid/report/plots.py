@@ -44,6 +44,10 @@ def plot_solution(solution: Solution, out_dir: Path) -> list[Path]:
         from convexguid.report.potential_plots import plot_potential_function
 
         return plot_potential_function(solution, out_dir, _save)
+    if solution.family == "quaternion_attitude":
+        from convexguid.report.attitude_plots import plot_quaternion_attitude
+
+        return plot_quaternion_attitude(solution, out_dir, _save)
     paths = []
     for stem, title, template, ylabel in PLOT_GROUPS.get(solution.family, []):
         fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)

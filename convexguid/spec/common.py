@@ -248,25 +248,27 @@ class KeepOutCone(SpecModel):
         return math.radians(self.half_angle_deg)
 
 
-def _cone_list(v: object) -> tuple[object, ...]:
+def _as_tuple(v: object) -> tuple[object, ...]:
     if not isinstance(v, (list, tuple)):
-        raise spec_error("expected a list of keep-out cones", "give a YAML list (possibly empty) of mappings")
+        raise spec_error("expected a list", "give a YAML list (possibly empty) of mappings")
     return tuple(v)
 
 
-def _unique_cone_names(cones: tuple[KeepOutCone, ...]) -> tuple[KeepOutCone, ...]:
+def _unique_names(items: tuple) -> tuple:
     seen: set[str] = set()
-    for i, cone in enumerate(cones):
-        if cone.name in seen:
-            raise spec_error("duplicate keep-out cone name", "give every cone a unique name",
-                             key=(i, "name"), value=cone.name)
-        seen.add(cone.name)
-    return cones
+    for i, item in enumerate(items):
+        if item.name in seen:
+            raise spec_error("duplicate name", "give every entry a unique name", key=(i, "name"), value=item.name)
+        seen.add(item.name)
+    return items
 
 
-KeepOutList = Annotated[
-    tuple[KeepOutCone, ...], BeforeValidator(_cone_list), AfterValidator(_unique_cone_names)
-]
+def named_list(model: type) -> object:
+    """Type of a YAML list of ``model`` mappings with unique ``name`` keys, stored as a tuple."""
+    return Annotated[tuple[model, ...], BeforeValidator(_as_tuple), AfterValidator(_unique_names)]
+
+
+KeepOutList = named_list(KeepOutCone)
 """A YAML list of :class:`KeepOutCone` with unique names, stored as a tuple."""
 
 

@@ -32,6 +32,7 @@ from convexguid.spec.common import (
     UnitQuaternion,
     Vector3,
     VerificationSettings,
+    named_list,
     readonly,
     spec_error,
 )
@@ -126,8 +127,8 @@ class QuaternionAttitudeProblem(ProblemBase):
     spacecraft: AttitudeSpacecraft
     boundary: QuaternionBoundary
     keep_out: KeepOutList = ()
-    keep_in: tuple[KeepInCone, ...] = ()
-    forbidden: tuple[ForbiddenAttitude, ...] = ()
+    keep_in: named_list(KeepInCone) = ()  # type: ignore[valid-type]
+    forbidden: named_list(ForbiddenAttitude) = ()  # type: ignore[valid-type]
     objective: Literal["time", "energy"] = "time"
     initial_guess: Literal["eigenaxis", "path_transfer"] = "eigenaxis"
     discretization: HermiteSimpsonGrid = HermiteSimpsonGrid()
