@@ -150,7 +150,7 @@ def test_family_errors(tmp_path: Path) -> None:
 def test_duplicate_cone_names(tmp_path: Path) -> None:
     data = raw()
     data["keep_out"].append(copy.deepcopy(data["keep_out"][0]))
-    expected = r"^<dict>: keep_out\.1\.name: duplicate keep-out cone name \(got 'sun'\)"
+    expected = r"^<dict>: keep_out\.1\.name: duplicate name \(got 'sun'\)"
     with pytest.raises(SpecError, match=expected):
         parse_problem(data)
 

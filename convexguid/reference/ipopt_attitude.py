@@ -41,7 +41,7 @@ On ``K`` equal intervals, :math:`h = t_f / K`, with :math:`f_k = f(x_k, u_k)`:
 
     |q_b \\cdot q_k| \\le \\cos\\left((\\theta_m + m)/2\\right) \\;\\text{(forbidden attitude)},
 
-for every node :math:`k`, the rate box and the cones also at every interval midpoint
+for every node :math:`k`, the rate box, the cones and the forbidden attitudes also at every interval midpoint
 :math:`x_c = \\tfrac12(x_k + x_{k+1}) + \\tfrac{h}{8}(f_k - f_{k+1})`, with the node margin :math:`m`
 (angles clipped to :math:`[0, \\pi]`).
 :math:`C_{BI}(q)` is the unnormalised quadratic form, exactly as in the SCP transcription (no
@@ -178,7 +178,7 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
             groups.append((cosine, np.cos(max(0.0, cone.half_angle - margin)), np.inf))
     for fb in case.forbidden:
         bound = np.cos(min(np.pi, fb.min_angle + margin) / 2)
-        groups.append((ca.mtimes(ca.DM(np.asarray(fb.q, dtype=float)).T, X[:4, :]).T, -bound, bound))
+        groups.append((ca.mtimes(ca.DM(np.asarray(fb.q, dtype=float)).T, path_q).T, -bound, bound))
     g = ca.vertcat(*[expr for expr, _, _ in groups])
     lbg = np.concatenate([np.full(expr.numel(), lo) for expr, lo, _ in groups])
     ubg = np.concatenate([np.full(expr.numel(), hi) for expr, _, hi in groups])

@@ -25,7 +25,8 @@ below the tolerance at a feasible iterate. Stalling with constraints violated
 first multiplies the penalty weight by ten (an exact penalty needs a weight above
 the multipliers), up to ``penalty_max``; ``infeasible`` when the iterates still stall
 with constraints violated (or the hard linear constraints are inconsistent);
-``max_iterations``; or ``solver_error`` when the backend fails outright.
+``max_iterations``; or ``solver_error`` when the backend fails numerically more than
+:data:`MAX_BACKEND_FAILURES` times in a row (each failure is retried with a smaller trust region).
 """
 
 from __future__ import annotations
@@ -81,6 +82,10 @@ class SCPResult:
         """The time split reported in a solution's summary (``timing``), s."""
         return {"scp_s": self.wall_time_s, "convexify_s": self.convexify_time_s,
                 "solver_s": self.solver_time_s, "overhead_s": self.overhead_time_s}
+
+
+MAX_BACKEND_FAILURES = 3
+"""Consecutive numerical failures of the convex solver (each retried with a 4x smaller trust region) tolerated."""
 
 
 def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
@@ -139,6 +144,7 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
     merit = merit_at(x, ev)
     backend = None
     history: list[IterationRecord] = []
+    failures = 0
     status, message = "max_iterations", f"no convergence in {settings.max_iterations} iterations"
 
     for it in range(1, settings.max_iterations + 1):
@@ -155,9 +161,21 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings,
         if not res.usable:
             if res.status == "infeasible":
                 status, message = "infeasible", "the hard linear constraints (boundary conditions) are inconsistent"
-            else:
-                status, message = "solver_error", f"backend {settings.backend} returned {res.status}"
-            break
+                break
+            failures += 1
+            if failures > MAX_BACKEND_FAILURES:
+                status, message = "solver_error", f"backend {settings.backend} returned {res.status} " \
+                                                  f"{failures} times in a row"
+                break
+            # a numerical failure of the backend: retry a smaller, better-conditioned subproblem
+            radius = max(0.25 * radius, settings.trust_region_min)
+            history.append(IterationRecord(it, objective_value(ev, weights, cost, x), _max_violation(ev), 0.0, radius,
+                                           float("nan"), False, res.status, res.iterations,
+                                           time.perf_counter() - start))
+            if log is not None:
+                log(history[-1])
+            continue
+        failures = 0
         d = assembler.step(res.x)
         if curvature is not None and res.z is not None:
             multipliers = _split_by_block(assembler.equality_multipliers(res.z), raw)

@@ -1,0 +1,133 @@
+"""Quaternion attitude family: Jacobians, the SCP against IPOPT, dense verification, bad input."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from convexguid.api import _spec, solve
+from convexguid.errors import SpecError
+from convexguid.formulations.quaternion_attitude import QuaternionProgram, eigenaxis_guess, eigenaxis_time_guess
+from convexguid.formulations.quaternion_attitude_solve import build_case, scp_settings
+from convexguid.rotations import quat_sign_continuous
+from convexguid.scp.engine import solve_scp
+from convexguid.spec import load_problem
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+MULTICONE = PROBLEMS / "wang_multicone_time.yaml"
+GUO = PROBLEMS / "guo2011_scp_time.yaml"
+
+
+def _program(path: Path, intervals: int, overrides=(), tf: float | None = None) -> tuple[QuaternionProgram, object]:
+    spec = _spec(path, list(overrides))
+    case = build_case(spec)
+    if tf is not None:
+        case = replace(case, tf=tf)
+    tf0 = case.tf or eigenaxis_time_guess(case)
+    guess = eigenaxis_guess(case, np.linspace(0.0, tf0, intervals + 1))
+    return QuaternionProgram(case, intervals, guess, tf0), spec
+
+
+@pytest.mark.parametrize("path,tf", [(MULTICONE, None), (GUO, 150.0)])
+def test_jacobians_match_finite_differences(path, tf):
+    program, _ = _program(path, 8, tf=tf)
+    rng = np.random.default_rng(3)
+    x = program.initial_guess() + 1e-2 * rng.standard_normal(program.num_variables) * program.variable_scale()
+    ev = program.evaluate(x)
+    blocks = ev.equalities + ev.inequalities
+    for _ in range(3):
+        d = 1e-6 * rng.standard_normal(x.size) * program.variable_scale()
+        plus, minus = program.evaluate(x + d, False), program.evaluate(x - d, False)
+        for b, bp, bm in zip(blocks, plus.equalities + plus.inequalities, minus.equalities + minus.inequalities,
+                             strict=True):
+            fd = (bp.values - bm.values) / 2
+            assert np.abs(b.jacobian @ d - fd).max() <= 1e-9 * max(1.0, np.abs(fd).max()), b.name
+
+
+def test_min_time_matches_ipopt_on_the_same_nlp():
+    pytest.importorskip("casadi")
+    from convexguid.reference.ipopt_attitude import solve_quaternion_attitude_ipopt
+
+    program, spec = _program(MULTICONE, 20)
+    result = solve_scp(program, scp_settings(spec.solver, program))
+    assert result.status == "converged"
+    ref = solve_quaternion_attitude_ipopt(program.case, 20, program.nodes(program.initial_guess()),
+                                          program.objective_scale)
+    assert ref.success
+    assert abs(result.objective - ref.objective) <= 1e-3 * ref.objective
+    # and it beats the eigenaxis guess's duration, which breaks two cones
+    assert result.objective < program.objective_scale
+
+
+def test_minimum_time_plan_is_verified_and_meets_every_cone():
+    sol = solve(MULTICONE, ["discretization.intervals=24"])
+    assert sol.ok, sol.message
+    names = {c.name: c for c in sol.verification.checks}
+    for cone in ("body1", "body2", "body3", "body4"):
+        check = names[f"keep_out_{cone}_deg"]
+        assert check.worst >= check.bound
+    assert names["rate_degps"].worst <= 3.0 + 1e-9
+    assert names["torque_Nm"].worst <= 0.1 + 1e-9
+    assert sol.extras["min_cone_margin_deg"] >= 0
+    # the eigenaxis slew passes within a fraction of a degree of cones 1 and 2 (inside them)
+    eig = sol.extras["eigenaxis_min_angle_deg"]
+    assert eig["body1"] < 20 and eig["body2"] < 15
+
+
+def test_energy_at_fixed_time_uses_less_energy_than_min_time():
+    t_min = solve(GUO, ["discretization.intervals=16"])
+    energy = solve(GUO, ["discretization.intervals=16", "objective=energy",
+                         f"boundary.tf_s={2 * t_min.extras['maneuver_time_s']}"])
+    assert t_min.ok and energy.ok
+    assert energy.extras["energy"] < 0.5 * t_min.extras["energy"]
+    forbidden = [c for c in energy.verification.checks if c.name.startswith("forbidden")][0]
+    assert forbidden.worst >= 10.0
+
+
+def test_sign_continuous_quaternions():
+    q = np.array([[0, 0, 0, 1.0], [0, 0, -0.1, -0.995], [0, 0, 0.2, 0.98]])
+    out = quat_sign_continuous(q)
+    assert np.all(np.sum(out[1:] * out[:-1], axis=1) >= 0)
+    assert np.allclose(np.abs(out), np.abs(q))
+
+
+def _write(tmp_path: Path, text: str, replace_from: str, replace_to: str) -> Path:
+    out = tmp_path / "case.yaml"
+    out.write_text(text.replace(replace_from, replace_to))
+    return out
+
+
+@pytest.mark.parametrize("old,new,needle", [
+    ("final: {axis: [1.0, -1.0, 0.5], angle_deg: 160.0}", "final: {quaternion: [0.0, 0.0, 0.0, 0.0]}",
+     "quaternion"),
+    ("final: {axis: [1.0, -1.0, 0.5], angle_deg: 160.0}", "final: {quaternion: [0.0, 0.0, 0.0, 2.0]}",
+     "quaternion"),
+    ("torque_max_Nm: 0.1", "torque_max_Nm: 0.0", "torque_max_Nm"),
+    ("rate_max_degps: 3.0", "rate_max_degps: -3.0", "rate_max_degps"),
+    ("inertial_dir: [-0.466, -0.688, 0.556], half_angle_deg: 20", "inertial_dir: [0, 0, 1], half_angle_deg: 20",
+     "half_angle_deg"),
+])
+def test_bad_input_is_a_one_line_error(tmp_path, old, new, needle):
+    path = _write(tmp_path, MULTICONE.read_text(), old, new)
+    with pytest.raises(SpecError) as err:
+        load_problem(path)
+    message = str(err.value)
+    assert "\n" not in message and needle in message and str(path.name) in message
+
+
+def test_keep_in_inside_keep_out_is_rejected(tmp_path):
+    text = MULTICONE.read_text() + ("keep_in:\n  - {name: inside, body_axis: [0, 0, 1], "
+                                    "inertial_dir: [-0.466, -0.688, 0.556], half_angle_deg: 5}\n")
+    path = tmp_path / "case.yaml"
+    path.write_text(text)
+    with pytest.raises(SpecError, match="keep_in"):
+        load_problem(path)
+
+
+def test_initial_attitude_inside_the_forbidden_zone_is_rejected(tmp_path):
+    path = _write(tmp_path, GUO.read_text(), "min_angle_deg: 10.0", "min_angle_deg: 50.0")
+    with pytest.raises(SpecError, match="forbidden"):
+        load_problem(path)
