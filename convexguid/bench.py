@@ -21,10 +21,11 @@ import importlib.metadata
 import os
 import platform
 import shlex
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from os import PathLike
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -40,6 +41,11 @@ IPOPT_TOLERANCE = 1e-8
 COLUMNS = ("N", "method", "status", "objective", "iterations", "wall s", "convexify s", "solver s",
            "overhead s", "setup s", "IPOPT/SCP time")
 """Table columns; ``setup s`` is IPOPT's model construction, outside its wall time."""
+
+FLAT_DEFAULT_NODES = (16, 32, 64, 128)
+"""``convexguid bench``'s default ``--nodes`` (flat-attitude degrees); other families read it as "their default"."""
+
+_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -78,6 +84,12 @@ class BenchRow:
 def _one_line(text: str, limit: int = 60) -> str:
     text = " ".join(text.split())
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _best_of(repeat: int, run: Callable[[], _T], wall: Callable[[_T], float]) -> tuple[_T, list[_T]]:
+    """The fastest of ``repeat`` (at least one) calls of ``run`` by ``wall``, and all of them."""
+    runs = [run() for _ in range(max(1, repeat))]
+    return min(runs, key=wall), runs
 
 
 def _time_scp(program: FlatAttitudeProgram, settings: SCPSettings, x0: np.ndarray, repeat: int) -> SCPResult:
@@ -160,11 +172,16 @@ def _text_table(rows: Sequence[BenchRow]) -> str:
     return "\n".join(lines)
 
 
+def _markdown_grid(columns: Sequence[str], align: Sequence[str], body: Sequence[Sequence[str]]) -> str:
+    """A markdown table: header ``columns``, alignment row ``align`` (``":---"``, ``"---:"``), rows of ``body``."""
+    lines = ["| " + " | ".join(columns) + " |", "| " + " | ".join(align) + " |"]
+    lines += ["| " + " | ".join(c.replace("|", "\\|") for c in row) + " |" for row in body]
+    return "\n".join(lines)
+
+
 def _markdown_table(rows: Sequence[BenchRow]) -> str:
     align = ["---:", ":---", ":---"] + ["---:"] * (len(COLUMNS) - 3)
-    lines = ["| " + " | ".join(COLUMNS) + " |", "| " + " | ".join(align) + " |"]
-    lines += ["| " + " | ".join(c.replace("|", "\\|") for c in r.cells()) + " |" for r in rows]
-    return "\n".join(lines)
+    return _markdown_grid(COLUMNS, align, [r.cells() for r in rows])
 
 
 def _version(package: str) -> str:
@@ -172,6 +189,22 @@ def _version(package: str) -> str:
         return importlib.metadata.version(package)
     except importlib.metadata.PackageNotFoundError:
         return "not installed"
+
+
+def _environment_lines(packages: Sequence[str]) -> list[str]:
+    """Markdown bullets: machine, ``packages``' versions, BLAS/OpenMP thread variables, date (UTC)."""
+    machine = platform.processor() or platform.machine()
+    versions = ", ".join(f"{p} {_version(p)}" for p in packages)
+    threads = ", ".join(f"{v}={os.environ.get(v, 'unset')}" for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"))
+    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    return [
+        f"- Machine: {machine}, {os.cpu_count()} logical CPUs ({platform.platform()}, "
+        f"Python {platform.python_version()})",
+        f"- Versions: {versions}",
+        f"- BLAS/OpenMP threads: {threads} (numpy's BLAS is multi-threaded unless limited; on a busy machine "
+        "that slows the SCP's many small dense products)",
+        f"- Date: {when}",
+    ]
 
 
 def _command(problem_path: str | PathLike[str], nodes_list: Sequence[int], repeat: int,
@@ -229,16 +262,24 @@ def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLi
     return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
 
 
-def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int], repeat: int,
+def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | None, repeat: int,
               backends: Sequence[str], output_path: str | PathLike[str] | None = None) -> int:
     """Time the SCP (each backend) and IPOPT on ``problem_path`` for every grid size in ``nodes_list``.
+
+    Other families are passed on: ``rendezvous`` to
+    :func:`convexguid.bench_rendezvous.run_rendezvous_bench` (``nodes_list`` and ``backends`` do
+    not apply), ``quaternion_attitude`` to :func:`convexguid.bench_attitude.run_attitude_bench`
+    (``nodes_list`` = Hermite-Simpson interval counts; ``backends`` does not apply, the SCP uses
+    the file's backend).
 
     Parameters
     ----------
     problem_path : str or path-like
-        ``flat_attitude`` problem file.
-    nodes_list : sequence of int
-        Polynomial degrees :math:`N` to benchmark.
+        ``flat_attitude`` (or ``rendezvous``, ``quaternion_attitude``) problem file.
+    nodes_list : sequence of int or None
+        Polynomial degrees :math:`N` to benchmark; ``None``, or :data:`FLAT_DEFAULT_NODES` (what the
+        command line passes when ``--nodes`` is not given) for a family other than ``flat_attitude``,
+        means that family's default.
     repeat : int
         Timed runs per case; the fastest is reported.
     backends : sequence of str
@@ -249,8 +290,20 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int], repe
     Returns
     -------
     int
-        Exit code, 0.
+        Exit code: 0 for ``flat_attitude``; for the other families, their runner's.
     """
+    family = load_problem(problem_path, []).family
+    if family == "rendezvous":
+        from convexguid.bench_rendezvous import run_rendezvous_bench
+
+        return run_rendezvous_bench(problem_path, repeat, output_path)
+    if family == "quaternion_attitude":
+        from convexguid.bench_attitude import DEFAULT_INTERVALS, run_attitude_bench
+
+        default = nodes_list is None or tuple(nodes_list) == FLAT_DEFAULT_NODES
+        return run_attitude_bench(problem_path, DEFAULT_INTERVALS if default else nodes_list, repeat, output_path)
+    if nodes_list is None:
+        nodes_list = FLAT_DEFAULT_NODES
     with_ipopt = casadi_available()
     ipopt_note = None if with_ipopt else (
         "IPOPT column skipped: casadi is not installed (pip install 'convexguid[bench]').")

@@ -25,18 +25,14 @@ for Mars landing", J. Guidance, Control, and Dynamics 30(5), 2007 (lossless conv
 from __future__ import annotations
 
 import argparse
-import datetime
-import os
-import platform
 import shlex
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import TypeVar
 
-from convexguid.bench import _one_line, _version
+from convexguid.bench import _best_of, _environment_lines, _markdown_grid, _one_line
 from convexguid.formulations.rendezvous import Rendezvous, RendezvousPlan, build_case
 from convexguid.formulations.rendezvous_arcs import ArcsProgram
 from convexguid.formulations.rendezvous_lcvx import solve_lcvx
@@ -58,8 +54,6 @@ SCP_WALL_TARGET_S = 0.5
 COLUMNS = ("method", "status", "burn time s", "gap to lcvx", "iterations", "wall s", "solver s", "convexify s",
            "setup s")
 """Table columns (see the caption written by :func:`rendezvous_bench_markdown`)."""
-
-_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -92,12 +86,6 @@ class RendezvousBenchRow:
         return [self.method, self.status, num(self.burn_time_s, ".9g"), num(gap, ".2e"),
                 "-" if self.iterations is None else str(self.iterations), num(self.wall_s, ".4f"),
                 num(self.solver_s, ".4f"), num(self.convexify_s, ".4f"), num(self.setup_s, ".4f")]
-
-
-def _best_of(repeat: int, run: Callable[[], _T], wall: Callable[[_T], float]) -> tuple[_T, list[_T]]:
-    """The fastest of ``repeat`` (at least one) calls of ``run`` by ``wall``, and all of them."""
-    runs = [run() for _ in range(max(1, repeat))]
-    return min(runs, key=wall), runs
 
 
 def _failed(method: str, exc: Exception) -> RendezvousBenchRow:
@@ -209,31 +197,20 @@ def _markdown_table(rows: Sequence[RendezvousBenchRow]) -> str:
     lcvx = _by_method(rows, "lcvx")
     reference = lcvx.burn_time_s if lcvx is not None and lcvx.ok else None
     align = [":---", ":---"] + ["---:"] * (len(COLUMNS) - 2)
-    lines = ["| " + " | ".join(COLUMNS) + " |", "| " + " | ".join(align) + " |"]
-    lines += ["| " + " | ".join(c.replace("|", "\\|") for c in r.cells(reference)) + " |" for r in rows]
-    return "\n".join(lines)
+    return _markdown_grid(COLUMNS, align, [r.cells(reference) for r in rows])
 
 
 def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: str | PathLike[str], repeat: int,
                               grid_steps: int | None = None, ipopt_note: str | None = None,
                               output: str | PathLike[str] | None = None) -> str:
     """The benchmark as a markdown document: machine, versions, date, command, caption, table, notes."""
-    machine = platform.processor() or platform.machine()
-    versions = ", ".join(f"{p} {_version(p)}" for p in ("numpy", "scipy", "clarabel", "casadi"))
-    threads = ", ".join(f"{v}={os.environ.get(v, 'unset')}" for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"))
-    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     args = ["python", "-m", "convexguid.bench_rendezvous", str(problem_path), "--repeat", str(repeat)]
     command = shlex.join(args + (["--output", str(output)] if output is not None else []))
     steps = "the problem's `grid_steps`" if grid_steps is None else f"{grid_steps} steps"
     header = [
         f"# convexguid rendezvous benchmark: lcvx vs scp_arcs vs IPOPT on `{Path(problem_path).name}`",
         "",
-        f"- Machine: {machine}, {os.cpu_count()} logical CPUs ({platform.platform()}, "
-        f"Python {platform.python_version()})",
-        f"- Versions: {versions}",
-        f"- BLAS/OpenMP threads: {threads} (numpy's BLAS is multi-threaded unless limited; on a busy machine "
-        "that slows the SCP's many small dense products)",
-        f"- Date: {when}",
+        *_environment_lines(("numpy", "scipy", "clarabel", "casadi")),
         f"- Command: `{command}`",
         "",
         f"Best of {repeat} runs per method, times in seconds. `lcvx`: one SOCP on {steps} (zero-order hold); "
