@@ -72,13 +72,14 @@ class BenchRow:
 
     def cells(self) -> list[str]:
         """The row as strings, in the order of :data:`COLUMNS`."""
-        def num(v: float | None, fmt: str) -> str:
-            return "-" if v is None else format(v, fmt)
+        return [str(self.nodes), self.method, self.status, cell(self.objective, ".8g"), cell(self.iterations, "d"),
+                cell(self.wall_s, ".4f"), cell(self.convexify_s, ".4f"), cell(self.solver_s, ".4f"),
+                cell(self.overhead_s, ".4f"), cell(self.setup_s, ".4f"), cell(self.ratio, ".2f")]
 
-        return [str(self.nodes), self.method, self.status, num(self.objective, ".8g"),
-                "-" if self.iterations is None else str(self.iterations), num(self.wall_s, ".4f"),
-                num(self.convexify_s, ".4f"), num(self.solver_s, ".4f"), num(self.overhead_s, ".4f"),
-                num(self.setup_s, ".4f"), num(self.ratio, ".2f")]
+
+def cell(value: float | int | None, fmt: str) -> str:
+    """A table cell: ``value`` formatted with ``fmt``, or ``-`` where it does not apply."""
+    return "-" if value is None else format(value, fmt)
 
 
 def _one_line(text: str, limit: int = 60) -> str:

@@ -31,12 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench import _best_of, _environment_lines, _markdown_grid, _one_line
-from convexguid.formulations.quaternion_attitude import (
-    AttitudeCase,
-    eigenaxis_guess,
-    eigenaxis_time_guess,
-)
+from convexguid.bench import _best_of, _environment_lines, _markdown_grid, _one_line, cell
+from convexguid.formulations.quaternion_attitude import AttitudeCase, eigenaxis_start
 from convexguid.formulations.quaternion_attitude_solve import (
     build_case,
     path_transfer_problem,
@@ -113,14 +109,11 @@ class AttitudeBenchRow:
 
     def cells(self) -> list[str]:
         """The row as strings, in the order of :data:`COLUMNS`."""
-        def num(v: float | None, fmt: str) -> str:
-            return "-" if v is None else format(v, fmt)
-
-        return ["-" if self.intervals is None else str(self.intervals), self.method, self.status,
-                num(self.tf_s, ".6f"), num(self.energy, ".6e"), num(self.gap, "+.2e"),
-                "-" if self.iterations is None else str(self.iterations), num(self.wall_s, ".4f"),
-                num(self.scp_s, ".4f"), num(self.solver_s, ".4f"), num(self.setup_s, ".4f"),
-                "-" if self.verified is None else ("yes" if self.verified else "NO"), num(self.margin_deg, ".4f")]
+        return [cell(self.intervals, "d"), self.method, self.status,
+                cell(self.tf_s, ".6f"), cell(self.energy, ".6e"), cell(self.gap, "+.2e"),
+                cell(self.iterations, "d"), cell(self.wall_s, ".4f"),
+                cell(self.scp_s, ".4f"), cell(self.solver_s, ".4f"), cell(self.setup_s, ".4f"),
+                "-" if self.verified is None else ("yes" if self.verified else "NO"), cell(self.margin_deg, ".4f")]
 
 
 def _failed(intervals: int | None, solver: str, objective: str, exc: Exception) -> AttitudeBenchRow:
@@ -135,12 +128,6 @@ def _spec(problem_path: str | PathLike[str], intervals: int, tf: float | None = 
     overrides += ["objective=time", "boundary.tf_s=null"] if tf is None else ["objective=energy",
                                                                              f"boundary.tf_s={tf!r}"]
     return load_problem(problem_path, overrides)
-
-
-def _eigenaxis_start(case: AttitudeCase, intervals: int) -> tuple[np.ndarray, float]:
-    """The SCP's eigenaxis start (node rows, final time), as in ``solve_scp_attitude``."""
-    tf_guess = case.tf or eigenaxis_time_guess(case)
-    return eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf_guess, intervals + 1)), tf_guess
 
 
 def _solution_nodes(sol: Solution) -> np.ndarray:
@@ -184,7 +171,7 @@ def _ipopt_row(case: AttitudeCase, intervals: int, objective: str, repeat: int, 
     """IPOPT on the NLP of ``case`` from ``start`` (default: the eigenaxis guess); ``setup s`` the fastest build."""
     from convexguid.reference.ipopt_attitude import solve_quaternion_attitude_ipopt
 
-    guess, tf_guess = _eigenaxis_start(case, intervals) if start is None else start
+    guess, tf_guess = eigenaxis_start(case, intervals) if start is None else start
     try:
         best, runs = _best_of(repeat, lambda: solve_quaternion_attitude_ipopt(case, intervals, guess, tf_guess,
                                                                               tol=IPOPT_TOLERANCE),

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 
-from convexguid.bench import _best_of, _environment_lines, _markdown_grid, _one_line
+from convexguid.bench import _best_of, _environment_lines, _markdown_grid, _one_line, cell
 from convexguid.formulations.rendezvous import Rendezvous, RendezvousPlan, build_case
 from convexguid.formulations.rendezvous_arcs import ArcsProgram
 from convexguid.formulations.rendezvous_lcvx import solve_lcvx
@@ -77,15 +77,12 @@ class RendezvousBenchRow:
 
     def cells(self, lcvx_burn_time_s: float | None) -> list[str]:
         """The row as strings in the order of :data:`COLUMNS`; the gap is relative to ``lcvx_burn_time_s``."""
-        def num(v: float | None, fmt: str) -> str:
-            return "-" if v is None else format(v, fmt)
-
         gap = None
         if self.burn_time_s is not None and lcvx_burn_time_s and self.method != "lcvx":
             gap = (self.burn_time_s - lcvx_burn_time_s) / lcvx_burn_time_s
-        return [self.method, self.status, num(self.burn_time_s, ".9g"), num(gap, ".2e"),
-                "-" if self.iterations is None else str(self.iterations), num(self.wall_s, ".4f"),
-                num(self.solver_s, ".4f"), num(self.convexify_s, ".4f"), num(self.setup_s, ".4f")]
+        return [self.method, self.status, cell(self.burn_time_s, ".9g"), cell(gap, ".2e"),
+                cell(self.iterations, "d"), cell(self.wall_s, ".4f"),
+                cell(self.solver_s, ".4f"), cell(self.convexify_s, ".4f"), cell(self.setup_s, ".4f")]
 
 
 def _failed(method: str, exc: Exception) -> RendezvousBenchRow:

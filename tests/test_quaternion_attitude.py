@@ -10,7 +10,7 @@ import pytest
 
 from convexguid.api import _spec, solve
 from convexguid.errors import SpecError
-from convexguid.formulations.quaternion_attitude import QuaternionProgram, eigenaxis_guess, eigenaxis_time_guess
+from convexguid.formulations.quaternion_attitude import QuaternionProgram, eigenaxis_start
 from convexguid.formulations.quaternion_attitude_solve import build_case, scp_settings
 from convexguid.rotations import quat_sign_continuous
 from convexguid.scp.engine import solve_scp
@@ -26,8 +26,7 @@ def _program(path: Path, intervals: int, overrides=(), tf: float | None = None) 
     case = build_case(spec)
     if tf is not None:
         case = replace(case, tf=tf)
-    tf0 = case.tf or eigenaxis_time_guess(case)
-    guess = eigenaxis_guess(case, np.linspace(0.0, tf0, intervals + 1))
+    guess, tf0 = eigenaxis_start(case, intervals)
     return QuaternionProgram(case, intervals, guess, tf0), spec
 
 

@@ -22,8 +22,7 @@ from convexguid.formulations.quaternion_attitude import (  # noqa: E402
     Cone,
     Forbidden,
     QuaternionProgram,
-    eigenaxis_guess,
-    eigenaxis_time_guess,
+    eigenaxis_start,
 )
 from convexguid.formulations.quaternion_attitude_solve import build_case  # noqa: E402
 from convexguid.reference.ipopt_attitude import solve_quaternion_attitude_ipopt  # noqa: E402
@@ -46,11 +45,6 @@ def _rest_to_rest(inertia: np.ndarray, angle: float = np.pi / 2, **extra) -> Att
                         np.zeros(3), **extra)
 
 
-def _eigenaxis_start(case: AttitudeCase, intervals: int) -> tuple[np.ndarray, float]:
-    tf = case.tf or eigenaxis_time_guess(case)
-    return eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf, intervals + 1)), tf
-
-
 def _assert_satisfies_program(program: QuaternionProgram, x: np.ndarray) -> None:
     """The numpy transcription's defects, boundary rows, boxes, cones and forbidden rows hold at ``x``."""
     ev = program.evaluate(x, jacobians=False)
@@ -66,7 +60,7 @@ def _assert_satisfies_program(program: QuaternionProgram, x: np.ndarray) -> None
 @pytest.fixture(scope="module")
 def no_cone_time():
     case = _rest_to_rest(np.diag([10.0, 12.0, 15.0]))
-    guess, tf_guess = _eigenaxis_start(case, K_SMALL)
+    guess, tf_guess = eigenaxis_start(case, K_SMALL)
     result = solve_quaternion_attitude_ipopt(case, K_SMALL, guess, tf_guess)
     print(f"no-cone minimum time {result.objective:.6f} s ({result.status}, {result.iterations} it, "
           f"{result.wall_time_s:.3f} s)")
@@ -101,7 +95,7 @@ def test_full_inertia_keep_in_and_forbidden_attitude():
     zenith = np.array([0.0, 0.0, 1.0])
     case = _rest_to_rest(inertia, cones=(Cone("zenith", zenith, zenith, np.radians(40.0), keep_out=False),),
                          forbidden=(Forbidden("midway", axis_angle_to_quat([0, 0, 1], np.pi / 4), np.radians(38.0)),))
-    guess, tf_guess = _eigenaxis_start(case, K_SMALL)
+    guess, tf_guess = eigenaxis_start(case, K_SMALL)
     margin = np.radians(1.0)
     result = solve_quaternion_attitude_ipopt(case, K_SMALL, guess, tf_guess, margin=margin)
     assert result.success, result.status
@@ -123,7 +117,7 @@ def test_energy_decreases_with_the_final_time():
     energies = []
     for tf in (50.0, 70.0):
         case = replace(base, tf=tf)
-        guess, _ = _eigenaxis_start(case, K_SMALL)
+        guess, _ = eigenaxis_start(case, K_SMALL)
         result = solve_quaternion_attitude_ipopt(case, K_SMALL, guess, tf)
         assert result.success, result.status
         program = QuaternionProgram(case, K_SMALL, guess, tf)
@@ -141,7 +135,7 @@ def test_multicone_minimum_time_clears_every_cone():
     """design.md's four-cone scenario from the (cone-crossing) eigenaxis guess, K = 30."""
     case = build_case(load_problem(MULTICONE, []))
     intervals = 30
-    guess, tf_guess = _eigenaxis_start(case, intervals)
+    guess, tf_guess = eigenaxis_start(case, intervals)
     result = solve_quaternion_attitude_ipopt(case, intervals, guess, tf_guess)
     print(f"multicone K={intervals}: minimum time {result.objective:.6f} s ({result.status}, {result.iterations} it, "
           f"solve {result.wall_time_s:.3f} s, setup {result.setup_time_s:.3f} s)")

@@ -164,6 +164,12 @@ def eigenaxis_guess(case: AttitudeCase, times: np.ndarray) -> np.ndarray:
     return np.hstack([q, w, u])
 
 
+def eigenaxis_start(case: AttitudeCase, intervals: int) -> tuple[np.ndarray, float]:
+    """The default SCP start: eigenaxis node rows over the case's :math:`t_f` (or :func:`eigenaxis_time_guess`)."""
+    tf_guess = case.tf or eigenaxis_time_guess(case)
+    return eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf_guess, intervals + 1)), tf_guess
+
+
 def eigenaxis_time_guess(case: AttitudeCase) -> float:
     """Duration of a rest-to-rest eigenaxis slew that roughly respects both boxes (a starting :math:`t_f`)."""
     axis, angle = eigenaxis_rotation(case.q0, case.qf)

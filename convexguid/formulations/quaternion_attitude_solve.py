@@ -22,7 +22,7 @@ from convexguid.formulations.quaternion_attitude import (
     Forbidden,
     QuaternionProgram,
     eigenaxis_guess,
-    eigenaxis_time_guess,
+    eigenaxis_start,
 )
 from convexguid.planners.path_transfer import PathTransferCone, PathTransferProblem, plan_path_transfer
 from convexguid.rotations import quat_angle_between, quat_sign_continuous
@@ -134,8 +134,7 @@ def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[
         scale = plan.maneuver_time_s / tf_guess
         guess = np.hstack([q, w * scale, u * scale**2])
     else:
-        tf_guess = case.tf or eigenaxis_time_guess(case)
-        guess = eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf_guess, K + 1))
+        guess, tf_guess = eigenaxis_start(case, K)
     program = QuaternionProgram(case, K, guess, tf_guess)
     result = solve_scp(program, scp_settings(spec.solver, program), log)
     for _ in range(MAX_TIGHTENINGS + 1):

@@ -43,7 +43,19 @@ DynamicsJacobian = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarr
 
 
 @dataclass(frozen=True)
-class HermiteSimpsonMidpoint:
+class IntervalMap:
+    """Values of a map over ``K`` intervals (rows) and its partials in the interval's ends and length."""
+
+    values: np.ndarray
+    d_x0: np.ndarray
+    d_u0: np.ndarray
+    d_x1: np.ndarray
+    d_u1: np.ndarray
+    d_h: np.ndarray
+
+
+@dataclass(frozen=True)
+class HermiteSimpsonMidpoint(IntervalMap):
     """Midpoint states :math:`x_c` of ``K`` intervals and their partial derivatives (same layout as the defects).
 
     .. math::
@@ -58,28 +70,15 @@ class HermiteSimpsonMidpoint:
     which the interpolated trajectory is unchecked.
     """
 
-    values: np.ndarray
-    d_x0: np.ndarray
-    d_u0: np.ndarray
-    d_x1: np.ndarray
-    d_u1: np.ndarray
-    d_h: np.ndarray
-
 
 @dataclass(frozen=True)
-class HermiteSimpsonDefects:
+class HermiteSimpsonDefects(IntervalMap):
     """Defects :math:`\\zeta_k` of ``K`` intervals and their partial derivatives.
 
     ``d_x0[k]`` is :math:`\\partial\\zeta_k/\\partial x_0` (nx, nx), likewise ``d_u0``, ``d_x1``,
     ``d_u1`` (nx, nu for controls); ``d_h[k]`` is :math:`\\partial\\zeta_k/\\partial h_k` (nx,).
     """
 
-    values: np.ndarray
-    d_x0: np.ndarray
-    d_u0: np.ndarray
-    d_x1: np.ndarray
-    d_u1: np.ndarray
-    d_h: np.ndarray
     midpoint: HermiteSimpsonMidpoint
 
 
