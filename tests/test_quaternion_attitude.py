@@ -130,3 +130,19 @@ def test_initial_attitude_inside_the_forbidden_zone_is_rejected(tmp_path):
     path = _write(tmp_path, GUO.read_text(), "min_angle_deg: 10.0", "min_angle_deg: 50.0")
     with pytest.raises(SpecError, match="forbidden"):
         load_problem(path)
+
+
+def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
+    """Issue 5's comparison: same slew and limits, tf = the potential-function controller's 0.1 deg time."""
+    from convexguid.report.comparisons import guo_table
+
+    controller = solve(PROBLEMS / "guo2011_adaptive.yaml")
+    tf = controller.extras["maneuver_time_01deg_s"]
+    energy_plan = solve(GUO, ["discretization.intervals=16", "objective=energy", f"boundary.tf_s={tf!r}"])
+    time_plan = solve(GUO, ["discretization.intervals=16"])
+    assert energy_plan.ok and time_plan.ok
+    assert energy_plan.extras["maneuver_time_s"] == pytest.approx(tf)
+    assert energy_plan.extras["energy"] < controller.extras["energy_N2m2s"]
+    assert time_plan.extras["maneuver_time_s"] < tf
+    table = "\n".join(guo_table(controller, time_plan, energy_plan))
+    assert "% less energy" in table and "| SCP, minimum time |" in table
