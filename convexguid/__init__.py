@@ -1,11 +1,34 @@
 """convexguid: spacecraft guidance problems solved as sequences of convex programs.
 
 Public API: :func:`load_problem`, :func:`solve`, :func:`simulate`, :func:`validate`.
+They are imported on first use, so ``import convexguid`` stays light (no SCP engine, no matplotlib).
 """
 
-from convexguid.api import simulate, solve
-from convexguid.report.validation import validate
-from convexguid.spec import load_problem
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from convexguid.api import simulate, solve
+    from convexguid.report.validation import validate
+    from convexguid.spec import load_problem
 
 __all__ = ["load_problem", "simulate", "solve", "validate"]
 __version__ = "0.1.0"
+
+_PUBLIC = {"load_problem": "convexguid.spec", "simulate": "convexguid.api", "solve": "convexguid.api",
+           "validate": "convexguid.report.validation"}
+"""Module of each public name."""
+
+
+def __getattr__(name: str) -> Any:
+    if name in _PUBLIC:
+        value = getattr(importlib.import_module(_PUBLIC[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

@@ -4,16 +4,15 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from convexguid.errors import SpecError
-from convexguid.formulations import FAMILY_SOLVERS
-from convexguid.scp.engine import IterationRecord
-from convexguid.sim.runner import simulate_problem
-from convexguid.solution import Solution
+from convexguid.families import FAMILIES, get_family
 from convexguid.spec import ProblemSpec, load_problem
 
-SIMULATED_FAMILIES = ("potential_function",)
-"""Families run by closed-loop simulation (:func:`simulate`) instead of planning."""
+if TYPE_CHECKING:
+    from convexguid.scp.engine import IterationRecord
+    from convexguid.solution import Solution
 
 
 def _spec(problem: str | Path | ProblemSpec, overrides: Sequence[str]) -> ProblemSpec:
@@ -29,12 +28,10 @@ def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] = (),
 
     ``overrides`` are ``dotted.key=value`` strings as for ``convexguid solve --set``;
     ``log`` receives one :class:`~convexguid.scp.engine.IterationRecord` per SCP iteration.
-    A simulated family (``potential_function``) is passed to :func:`simulate` (``log`` is unused).
+    A simulated family (``potential_function``) is simulated as by :func:`simulate` (``log`` is unused).
     """
     spec = _spec(problem, overrides)
-    if spec.family in SIMULATED_FAMILIES:
-        return simulate_problem(spec)
-    return FAMILY_SOLVERS[spec.family](spec, log=log)
+    return get_family(spec.family).solve(spec, log)
 
 
 def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] = ()) -> Solution:
@@ -49,7 +46,9 @@ def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] = ()) -
         For invalid input or a family that is planned, not simulated (use :func:`solve`).
     """
     spec = _spec(problem, overrides)
-    if spec.family not in SIMULATED_FAMILIES:
+    family = get_family(spec.family)
+    if not family.simulated:
+        simulated = ", ".join(name for name, f in FAMILIES.items() if f.simulated)
         raise SpecError(f"{spec.source}: family: {spec.family!r} is planned, not simulated; use convexguid solve "
-                        f"(simulate handles: {', '.join(SIMULATED_FAMILIES)})")
-    return simulate_problem(spec)
+                        f"(simulate handles: {simulated})")
+    return family.solve(spec, None)

@@ -9,10 +9,14 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from convexguid.errors import ConvexGuidError
-from convexguid.scp.engine import IterationRecord
-from convexguid.solution import Solution
+from convexguid.bench_common import FLAT_DEFAULT_NODES
+from convexguid.errors import ConvexGuidError, SpecError
+
+if TYPE_CHECKING:
+    from convexguid.scp.engine import IterationRecord
+    from convexguid.solution import Solution
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -31,7 +35,7 @@ def _parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="time the SCP against IPOPT on the same transcription "
                            "(rendezvous files: lcvx vs scp_arcs vs IPOPT; --nodes and --backends do not apply)")
     bench.add_argument("problem", nargs="?", type=Path, default=Path("problems/cai2018_flat_attitude.yaml"))
-    bench.add_argument("--nodes", type=int, nargs="+", default=[16, 32, 64, 128])
+    bench.add_argument("--nodes", type=int, nargs="+", default=list(FLAT_DEFAULT_NODES))
     bench.add_argument("--repeat", type=int, default=3, help="timed runs per case (best is reported)")
     bench.add_argument("--backends", nargs="+", default=["clarabel", "osqp"])
     bench.add_argument("--output", type=Path, help="also write the table (markdown) here")
@@ -110,8 +114,8 @@ def _finish(sol: Solution, args: argparse.Namespace) -> int:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from convexguid.api import simulate
+    from convexguid.families.potential_function.spec import PotentialFunctionProblem
     from convexguid.spec import load_problem
-    from convexguid.spec.potential_function import PotentialFunctionProblem
 
     spec = load_problem(args.problem, args.overrides)
     if not args.quiet and isinstance(spec, PotentialFunctionProblem):
@@ -146,15 +150,15 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
+    from convexguid.families import FAMILIES, get_family
     from convexguid.spec import load_problem
 
-    if load_problem(args.problem).family == "rendezvous":
-        from convexguid.bench_rendezvous import run_rendezvous_bench
-
-        return run_rendezvous_bench(args.problem, args.repeat, args.output)
-    from convexguid.bench import run_bench
-
-    return run_bench(args.problem, args.nodes, args.repeat, args.backends, args.output)
+    family = get_family(load_problem(args.problem).family)
+    if family.bench is None:
+        benched = ", ".join(name for name, f in FAMILIES.items() if f.bench is not None)
+        raise SpecError(f"{args.problem}: family {family.name!r} has no benchmark; "
+                        f"convexguid bench handles: {benched}")
+    return family.bench(args.problem, args)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from convexguid.planners.path_transfer import eigenaxis_path
-from convexguid.report.attitude_plots import (
+from convexguid.families.quaternion_attitude.plots import (
     az_el_deg,
     cone_circle,
     cone_curves,
@@ -16,6 +15,7 @@ from convexguid.report.attitude_plots import (
     split_at_wrap,
     tracked_axes,
 )
+from convexguid.planners.path_transfer import eigenaxis_path
 from convexguid.report.plots import plot_solution
 from convexguid.rotations import dcm_to_quat, quat_conjugate, quat_multiply, quat_sign_continuous
 from convexguid.scp.problem import ProgramSize

@@ -2,8 +2,8 @@
 
 One ``K = 10`` run with ``repeat = 1`` (a few seconds): every method has a row with positive
 times, the markdown carries the table, and ``convexguid bench`` passes ``quaternion_attitude``
-files to :func:`convexguid.bench_attitude.run_attitude_bench`. The IPOPT rows are checked only
-when ``casadi`` is installed.
+files to :func:`convexguid.families.quaternion_attitude.bench.run_attitude_bench`. The IPOPT rows
+are checked only when ``casadi`` is installed.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-import convexguid.bench_attitude as bench_attitude
-from convexguid.bench import FLAT_DEFAULT_NODES, run_bench
-from convexguid.bench_attitude import COLUMNS, attitude_bench_markdown, bench_attitude_rows
+import convexguid.families.quaternion_attitude.bench as attitude_bench
+from convexguid.cli import main
+from convexguid.families.quaternion_attitude.bench import COLUMNS, attitude_bench_markdown, bench_attitude_rows
 from convexguid.reference import casadi_available
 
 MULTICONE = Path(__file__).resolve().parents[1] / "problems" / "wang_multicone_time.yaml"
@@ -51,7 +51,7 @@ def test_energy_final_time_is_the_factor_times_the_minimum_time(rows):
     scp_time, scp_energy = _row(rows, "scp time"), _row(rows, "scp energy")
     if not scp_time.ok:
         pytest.skip(f"minimum-time SCP did not converge: {scp_time.message}")
-    assert scp_energy.tf_s == pytest.approx(bench_attitude.ENERGY_TF_FACTOR * scp_time.tf_s)
+    assert scp_energy.tf_s == pytest.approx(attitude_bench.ENERGY_TF_FACTOR * scp_time.tf_s)
 
 
 @pytest.mark.parametrize("objective", ["time", "energy"])
@@ -86,10 +86,10 @@ def test_markdown_has_the_table_and_notes(rows):
 
 
 def test_bench_command_dispatches_attitude_files(monkeypatch, tmp_path):
-    """``run_bench`` hands the file on; the command line's flat default grid means the attitude default."""
+    """``convexguid bench`` hands the file on; the command line's flat default grid means the attitude default."""
     calls = []
-    monkeypatch.setattr(bench_attitude, "run_attitude_bench", lambda *args: calls.append(args) or 0)
+    monkeypatch.setattr(attitude_bench, "run_attitude_bench", lambda *args: calls.append(args) or 0)
     out = tmp_path / "bench.md"
-    assert run_bench(MULTICONE, list(FLAT_DEFAULT_NODES), 2, ["clarabel"], out) == 0
-    assert run_bench(MULTICONE, [12, 24], 1, ["clarabel"]) == 0
-    assert calls == [(MULTICONE, bench_attitude.DEFAULT_INTERVALS, 2, out), (MULTICONE, [12, 24], 1, None)]
+    assert main(["bench", str(MULTICONE), "--repeat", "2", "--output", str(out)]) == 0
+    assert main(["bench", str(MULTICONE), "--nodes", "12", "24", "--repeat", "1"]) == 0
+    assert calls == [(MULTICONE, attitude_bench.DEFAULT_INTERVALS, 2, out), (MULTICONE, [12, 24], 1, None)]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from convexguid import solve
-from convexguid.formulations.flat_attitude import FlatAttitudeProgram, build_problem
+from convexguid.families.flat_attitude.program import FlatAttitudeProgram, build_problem
 from convexguid.spec import load_problem
 
 PAPER = "problems/cai2018_flat_attitude.yaml"

@@ -10,8 +10,8 @@ import pytest
 
 from convexguid.api import _spec, solve
 from convexguid.errors import SpecError
-from convexguid.formulations.quaternion_attitude import QuaternionProgram, eigenaxis_start
-from convexguid.formulations.quaternion_attitude_solve import build_case, scp_settings
+from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_start
+from convexguid.families.quaternion_attitude.solve import build_case, scp_settings
 from convexguid.rotations import quat_sign_continuous
 from convexguid.scp.engine import solve_scp
 from convexguid.spec import load_problem
@@ -48,7 +48,7 @@ def test_jacobians_match_finite_differences(path, tf):
 
 def test_min_time_matches_ipopt_on_the_same_nlp():
     pytest.importorskip("casadi")
-    from convexguid.reference.ipopt_attitude import solve_quaternion_attitude_ipopt
+    from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt
 
     program, spec = _program(MULTICONE, 20)
     result = solve_scp(program, scp_settings(spec.solver, program))

@@ -1,9 +1,9 @@
 """Cross-check the quaternion attitude transcription against an independent IPOPT solve of the same NLP.
 
-The IPOPT reference (:mod:`convexguid.reference.ipopt_attitude`) writes the rigid-body dynamics,
+The IPOPT reference (:mod:`convexguid.families.quaternion_attitude.reference`) writes the rigid-body dynamics,
 the Hermite-Simpson defects, the cone cosines and the forbidden-attitude rows again in CasADi;
 its optima must satisfy the numpy transcription's constraints
-(:class:`~convexguid.formulations.quaternion_attitude.QuaternionProgram`), respect bounds that
+(:class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`), respect bounds that
 hold for any feasible slew, and clear every cone of the multi-cone scenario of design.md.
 """
 
@@ -17,15 +17,15 @@ import pytest
 
 pytest.importorskip("casadi")
 
-from convexguid.formulations.quaternion_attitude import (  # noqa: E402
+from convexguid.families.quaternion_attitude.program import (  # noqa: E402
     AttitudeCase,
     Cone,
     Forbidden,
     QuaternionProgram,
     eigenaxis_start,
 )
-from convexguid.formulations.quaternion_attitude_solve import build_case  # noqa: E402
-from convexguid.reference.ipopt_attitude import solve_quaternion_attitude_ipopt  # noqa: E402
+from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt  # noqa: E402
+from convexguid.families.quaternion_attitude.solve import build_case  # noqa: E402
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between  # noqa: E402
 from convexguid.spec import load_problem  # noqa: E402
 from convexguid.verify import keep_out_angles_deg  # noqa: E402

@@ -2,7 +2,7 @@
 
 A solver status alone proves nothing (design.md, "Tests"), so the SCP's optimum of the
 flat-attitude transcription (Cai, Zhu, Zeng 2018, N = 32) is compared with IPOPT's, whose
-maps are written independently in CasADi (:mod:`convexguid.reference.ipopt_flat`), in three
+maps are written independently in CasADi (:mod:`convexguid.families.flat_attitude.reference`), in three
 regimes: the paper case (Table 1, no path constraint active), a 25 s slew (the torque box
 binds) and a wider sun cone (the keep-out cone binds, ``problems/cai2018_flat_attitude_sun_active.yaml``).
 """
@@ -17,8 +17,9 @@ import pytest
 
 pytest.importorskip("casadi")
 
-from convexguid.formulations.flat_attitude import FlatAttitudeProblem, FlatAttitudeProgram, build_problem  # noqa: E402
-from convexguid.reference import ReferenceResult, solve_flat_attitude_ipopt  # noqa: E402
+from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem  # noqa: E402
+from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt  # noqa: E402
+from convexguid.reference import ReferenceResult  # noqa: E402
 from convexguid.scp.engine import SCPResult, solve_scp  # noqa: E402
 from convexguid.scp.problem import SCPSettings  # noqa: E402
 from convexguid.spec import load_problem  # noqa: E402

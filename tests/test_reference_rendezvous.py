@@ -1,6 +1,6 @@
 """Cross-check ``scp_arcs`` against an independent IPOPT solve of the same burn/coast NLP (Wang & Tang 2003).
 
-The IPOPT reference (:mod:`convexguid.reference.ipopt_rendezvous`) writes the Hermite-Simpson
+The IPOPT reference (:mod:`convexguid.families.rendezvous.reference`) writes the Hermite-Simpson
 defects and the Clohessy-Wiltshire coast map again in CasADi; its optimum must match the SCP's
 burn time on the paper case and satisfy the numpy transcription's constraints, and the
 rendezvous benchmark must run end to end.
@@ -16,11 +16,15 @@ from scipy.linalg import expm
 
 ca = pytest.importorskip("casadi")
 
-from convexguid.bench_rendezvous import run_rendezvous_bench  # noqa: E402
 from convexguid.dynamics.clohessy_wiltshire import cw_matrices  # noqa: E402
-from convexguid.formulations.rendezvous import build_case  # noqa: E402
-from convexguid.formulations.rendezvous_arcs import ArcsProgram  # noqa: E402
-from convexguid.reference import ArcsReferenceResult, cw_free_motion, solve_rendezvous_arcs_ipopt  # noqa: E402
+from convexguid.families.rendezvous.arcs import ArcsProgram  # noqa: E402
+from convexguid.families.rendezvous.bench import run_rendezvous_bench  # noqa: E402
+from convexguid.families.rendezvous.case import build_case  # noqa: E402
+from convexguid.families.rendezvous.reference import (  # noqa: E402
+    ArcsReferenceResult,
+    cw_free_motion,
+    solve_rendezvous_arcs_ipopt,
+)
 from convexguid.scp.engine import SCPResult, solve_scp  # noqa: E402
 from convexguid.scp.problem import SCPSettings  # noqa: E402
 from convexguid.spec import load_problem  # noqa: E402

@@ -14,9 +14,9 @@ from convexguid.api import solve
 from convexguid.cli import main
 from convexguid.dynamics.clohessy_wiltshire import cw_matrices, cw_stm, cw_stm_derivative, cw_zoh
 from convexguid.errors import SpecError
-from convexguid.formulations.rendezvous import build_case
-from convexguid.formulations.rendezvous_arcs import ArcsProgram
-from convexguid.formulations.rendezvous_lcvx import burn_structure, solve_lcvx
+from convexguid.families.rendezvous.arcs import ArcsProgram
+from convexguid.families.rendezvous.case import build_case
+from convexguid.families.rendezvous.lcvx import burn_structure, solve_lcvx
 from convexguid.spec import load_problem
 from convexguid.transcription.hermite_simpson import hermite_simpson_defects
 

@@ -12,7 +12,8 @@ import pytest
 import yaml
 
 from convexguid.errors import SpecError
-from convexguid.spec import FAMILY_MODELS, ProblemSpec, apply_overrides, load_problem, parse_problem
+from convexguid.families import get_family
+from convexguid.spec import ProblemSpec, apply_overrides, load_problem, parse_problem
 
 PROBLEM = Path(__file__).resolve().parents[1] / "problems" / "cai2018_flat_attitude.yaml"
 _DELETE = object()
@@ -52,7 +53,7 @@ def error_of(path: Path, overrides: tuple[str, ...] = ()) -> str:
 
 def test_real_problem_in_si_units() -> None:
     spec = load_problem(PROBLEM)
-    assert isinstance(spec, ProblemSpec) and isinstance(spec, FAMILY_MODELS["flat_attitude"])
+    assert isinstance(spec, ProblemSpec) and isinstance(spec, get_family("flat_attitude").spec_model)
     assert spec.source == str(PROBLEM)
     assert (spec.name, spec.family, spec.method, spec.objective) == (
         "cai2018-flat-attitude", "flat_attitude", "scp", "energy")

@@ -1,81 +1,27 @@
-"""Time-history plots of a solution: dense curves with the node values as circles (as in Cai et al. Figs. 1-3)."""
+"""Plots of a solution: the family's own figures (:attr:`convexguid.families.base.Family.plot`), and the
+labelling and saving helper they share.
+
+matplotlib is imported only by the families' plot modules, when something is plotted.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from convexguid.solution import Solution  # noqa: E402
-
-PLOT_GROUPS: dict[str, list[tuple[str, str, str, str]]] = {
-    # family: [(file stem, title, "dense column|node column" template, y label)]
-    "flat_attitude": [
-        ("euler_angles", "Euler angles (3-2-1)", "{axis}_planned_deg|{axis}_deg", "angle [deg]"),
-        ("body_rates", "Body rates", "omega{i}_degps|omega{i}_degps", "rate [deg/s]"),
-        ("torques", "Control torques", "u{i}_Nm|u{i}_Nm", "torque [N m]"),
-    ],
-}
-
-_AXES = ("roll", "pitch", "yaw")
-
-
-def _series(template: str) -> list[tuple[str, str, str]]:
-    """(label, dense column, node column) for the three components named by ``template``."""
-    dense_t, node_t = template.split("|")
-    out = []
-    for i, axis in enumerate(_AXES, start=1):
-        label = axis if "{axis}" in dense_t else f"{dense_t.split('{')[0]}{i}"
-        out.append((label, dense_t.format(axis=axis, i=i), node_t.format(axis=axis, i=i)))
-    return out
+from convexguid.families import get_family
+from convexguid.solution import Solution
 
 
 def plot_solution(solution: Solution, out_dir: Path) -> list[Path]:
-    """Write one PNG per plot group of the solution's family; return the paths."""
+    """Write the PNG figures of the solution's family into ``out_dir`` (created if missing); return the paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    if solution.family == "rendezvous":
-        from convexguid.report.rendezvous_plots import plot_rendezvous
-
-        return plot_rendezvous(solution, out_dir, _save)
-    if solution.family == "potential_function":
-        from convexguid.report.potential_plots import plot_potential_function
-
-        return plot_potential_function(solution, out_dir, _save)
-    if solution.family == "quaternion_attitude":
-        from convexguid.report.attitude_plots import plot_quaternion_attitude
-
-        return plot_quaternion_attitude(solution, out_dir, _save)
-    paths = []
-    for stem, title, template, ylabel in PLOT_GROUPS.get(solution.family, []):
-        fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
-        for (label, dense_col, node_col), color in zip(_series(template), ("C0", "C1", "C2"), strict=True):
-            if solution.dense is not None and dense_col in solution.dense.columns:
-                ax.plot(solution.dense.t, solution.dense.columns[dense_col], color=color, label=label, lw=1.4)
-            if solution.nodes is not None and node_col in solution.nodes.columns:
-                ax.plot(solution.nodes.t, solution.nodes.columns[node_col], "o", color=color, mfc="none", ms=4)
-        paths.append(_save(fig, ax, f"{solution.problem}: {title} (circles: nodes)", ylabel,
-                           out_dir / f"{stem}.png"))
-    for name, values in (solution.dense.columns.items() if solution.dense else []):
-        if name.startswith("keep_out_"):
-            paths.append(_plot_keep_out(solution, name, values, out_dir))
-    return paths
+    return get_family(solution.family).plot(solution, out_dir)
 
 
-def _plot_keep_out(solution: Solution, column: str, values, out_dir: Path) -> Path:
-    fig, ax = plt.subplots(figsize=(6.4, 3.0), dpi=120)
-    ax.plot(solution.dense.t, values, label="propagated")
-    if solution.verification is not None:
-        check = {c.name: c for c in solution.verification.checks}.get(column)
-        if check is not None:
-            ax.axhline(check.bound, color="r", ls="--", label="keep-out half-angle")
-    return _save(fig, ax, f"{solution.problem}: {column}", "angle [deg]", out_dir / f"{column}.png")
-
-
-def _save(fig, ax, title: str, ylabel: str, path: Path) -> Path:
+def save_figure(fig, ax, title: str, ylabel: str, path: Path) -> Path:
     """Label a time-history axis, write the figure to ``path`` and close it."""
+    import matplotlib.pyplot as plt
+
     ax.set_xlabel("time [s]")
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)

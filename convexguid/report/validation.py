@@ -1,7 +1,9 @@
 """``convexguid validate``: solve every problem with a ``reference:`` block and set it beside the paper.
 
 For each case the report has a table (quantity | paper | convexguid | relative
-difference | within tolerance), the dense verification figures and the plots.
+difference | within tolerance), the family's key figures, the dense verification
+figures and the plots (:class:`~convexguid.families.base.Family` gives the figures,
+the wording of the verification and the plots).
 Quantities under ``reference.values`` are compared with their relative tolerance;
 those under ``reference.max_values`` are upper limits (e.g. SCP iterations).
 """
@@ -14,31 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from convexguid.api import solve
+from convexguid.families import get_family
 from convexguid.report.comparisons import comparison_sections
 from convexguid.report.plots import plot_solution
 from convexguid.solution import Solution, write_text_atomic
 from convexguid.spec import ProblemSpec, load_problem
-
-KEY_FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
-    "rendezvous": (
-        ("burn_time_s", "total burn time, s"),
-        ("burn_arcs_s", "burns [start, end], s"),
-        ("lcvx_burn_time_s", "lcvx global optimum on the fixed grid, s"),
-        ("lcvx_burn_arcs_s", "lcvx burns [start, end], s"),
-        ("lcvx_gap_rel", "(scp_arcs - lcvx) / lcvx"),
-        ("planned_direction_norm_min", "smallest norm of the interpolated direction on burns (1 at nodes)"),
-    ),
-    "potential_function": (
-        ("maneuver_time_1deg_s", "time to within 1 deg of the command, s"),
-        ("maneuver_time_01deg_s", "time to within 0.1 deg of the command, s"),
-        ("min_theta_b_deg", "smallest angle to the forbidden attitude, deg"),
-        ("theta_m_deg", "forbidden half-angle theta_m, deg"),
-        ("max_abs_torque_Nm", "largest torque component, N m"),
-        ("energy_N2m2s", "energy integral of squared torque, N^2 m^2 s"),
-        ("final_error_deg", "final attitude error, deg"),
-    ),
-}
-"""Family figures listed under each case (summary key, description), beyond the paper comparison."""
 
 DEFAULT_PROBLEMS_DIR = Path("problems")
 DEFAULT_REPORT = Path("validation/REPORT.md")
@@ -162,16 +144,14 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
     else:
         lines += ["", f"Status `{sol.status}` ({sol.message}); {sol.method} with `{sol.solver}`, "
                   f"{sol.iterations} steps; wall time {sol.wall_time_s:.3f} s."]
-    summary = sol.summary()
-    figures = [(label, summary[key]) for key, label in KEY_FIGURES.get(sol.family, ()) if key in summary]
+    summary, family = sol.summary(), get_family(sol.family)
+    figures = [(label, summary[key]) for key, label in family.key_figures if key in summary]
     if figures:
         lines += ["", "| figure | value |", "|---|---|"]
         lines += [f"| {label} | {_fmt_any(value)} |" for label, value in figures]
     v = sol.verification
     if v is not None:
-        how = ("closed-loop simulation" if sol.family == "potential_function"
-               else "SciPy DOP853 re-propagation of the plan")
-        lines += ["", f"Dense verification ({v.grid_points} points, {how}):",
+        lines += ["", f"Dense verification ({v.grid_points} points, {family.verification_method}):",
                   "", "| constraint | worst on dense grid | bound |", "|---|---|---|"]
         for c in v.checks:
             lines.append(f"| {c.name} | {c.worst:.6g} | {'<=' if c.sense == 'max' else '>='} {c.bound:g} |")

@@ -36,6 +36,7 @@ import numpy as np
 
 from convexguid.control.potential_function import PotentialFunctionController
 from convexguid.errors import SpecError
+from convexguid.families.potential_function.spec import PotentialFunctionProblem
 from convexguid.rotations import quat_angle_between
 from convexguid.scp.problem import ProgramSize
 from convexguid.sim.reaction_wheel import (
@@ -47,7 +48,6 @@ from convexguid.sim.reaction_wheel import (
     simulate,
 )
 from convexguid.solution import Solution, Trajectory, _finite
-from convexguid.spec.potential_function import PotentialFunctionProblem
 from convexguid.verify import ConstraintCheck, Verification
 
 ARRIVAL_TOL_DEG = 0.1

@@ -376,7 +376,7 @@ class ProblemBase(SpecModel):
     name : str
         Problem name (used in reports and the summary JSON).
     family : str
-        Problem family; selects the model class (see ``FAMILY_MODELS``).
+        Problem family; selects the model class (see :mod:`convexguid.families`).
     method : str
         Solution method.
     description, notes : str or None

@@ -20,21 +20,9 @@ from pydantic_core import ErrorDetails
 
 from convexguid.errors import SpecError
 from convexguid.spec.common import SPEC_ERROR_TYPE, ProblemBase
-from convexguid.spec.flat_attitude import FlatAttitudeProblem
-from convexguid.spec.potential_function import PotentialFunctionProblem
-from convexguid.spec.quaternion_attitude import QuaternionAttitudeProblem
-from convexguid.spec.rendezvous import RendezvousProblem
 
 ProblemSpec = ProblemBase
 """Type of every validated problem (each family subclasses it)."""
-
-FAMILY_MODELS: dict[str, type[ProblemBase]] = {
-    "flat_attitude": FlatAttitudeProblem,
-    "rendezvous": RendezvousProblem,
-    "quaternion_attitude": QuaternionAttitudeProblem,
-    "potential_function": PotentialFunctionProblem,
-}
-"""Model class of each problem family, by the value of the ``family`` key."""
 
 _PROBLEMS = {
     "greater_than": "out of range", "greater_than_equal": "out of range", "less_than": "out of range",
@@ -190,21 +178,23 @@ def parse_problem(data: Mapping[str, Any], source: str = "<dict>") -> ProblemSpe
     Returns
     -------
     ProblemSpec
-        Instance of ``FAMILY_MODELS[data["family"]]``.
+        Instance of the ``spec_model`` of the family named by ``data["family"]`` (see :mod:`convexguid.families`).
 
     Raises
     ------
     SpecError
         One line naming the first problem (and how many more there are).
     """
-    known = ", ".join(FAMILY_MODELS)
+    from convexguid.families import FAMILIES  # here, not at the top: the families' spec models import this package
+
+    known = ", ".join(FAMILIES)
     if not isinstance(data, Mapping):
         raise SpecError(f"{source}: top level is not a mapping (got {_one_line(repr(data))}); "
                         "give a mapping of keys such as name, family, spacecraft")
     if "family" not in data:
         raise SpecError(f"{source}: family: missing required key; known families: {known}")
     family = data["family"]
-    model = FAMILY_MODELS.get(family) if isinstance(family, str) else None
+    model = FAMILIES[family].spec_model if isinstance(family, str) and family in FAMILIES else None
     if model is None:
         raise SpecError(f"{source}: family: unknown family (got {_one_line(repr(family))}); "
                         f"known families: {known}")

@@ -1,11 +1,11 @@
 """``convexguid bench``: time the SCP against IPOPT on the same flat-attitude transcription.
 
 For every polynomial degree :math:`N` the problem file is transcribed once
-(:func:`convexguid.formulations.flat_attitude.build_problem`) and solved from the
+(:func:`convexguid.families.flat_attitude.program.build_problem`) and solved from the
 same initial guess (:meth:`FlatAttitudeProgram.initial_guess`)
 
 - by the SCP engine (:func:`convexguid.scp.engine.solve_scp`), once per convex backend, and
-- by CasADi + IPOPT with exact Hessians (:func:`convexguid.reference.solve_flat_attitude_ipopt`),
+- by CasADi + IPOPT with exact Hessians (:func:`convexguid.families.flat_attitude.reference.solve_flat_attitude_ipopt`),
   when ``casadi`` is installed.
 
 Both methods solve the identical transcription: the torque box and the keep-out cones
@@ -16,21 +16,22 @@ Every case runs ``repeat`` times and the fastest run is reported.
 
 from __future__ import annotations
 
+import argparse
 import datetime
-import importlib.metadata
 import os
 import platform
 import shlex
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from os import PathLike
 from pathlib import Path
-from typing import TypeVar
 
 import numpy as np
 
-from convexguid.formulations.flat_attitude import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
-from convexguid.reference import casadi_available, solve_flat_attitude_ipopt
+from convexguid.bench_common import FLAT_DEFAULT_NODES, cell, markdown_grid, one_line, package_version
+from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
+from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt
+from convexguid.reference import casadi_available
 from convexguid.scp.engine import SCPResult, solve_scp
 from convexguid.scp.problem import SCPSettings
 from convexguid.spec import load_problem
@@ -41,11 +42,6 @@ IPOPT_TOLERANCE = 1e-8
 COLUMNS = ("N", "method", "status", "objective", "iterations", "wall s", "convexify s", "solver s",
            "overhead s", "setup s", "IPOPT/SCP time")
 """Table columns; ``setup s`` is IPOPT's model construction, outside its wall time."""
-
-FLAT_DEFAULT_NODES = (16, 32, 64, 128)
-"""``convexguid bench``'s default ``--nodes`` (flat-attitude degrees); other families read it as "their default"."""
-
-_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -77,22 +73,6 @@ class BenchRow:
                 cell(self.overhead_s, ".4f"), cell(self.setup_s, ".4f"), cell(self.ratio, ".2f")]
 
 
-def cell(value: float | int | None, fmt: str) -> str:
-    """A table cell: ``value`` formatted with ``fmt``, or ``-`` where it does not apply."""
-    return "-" if value is None else format(value, fmt)
-
-
-def _one_line(text: str, limit: int = 60) -> str:
-    text = " ".join(text.split())
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def _best_of(repeat: int, run: Callable[[], _T], wall: Callable[[_T], float]) -> tuple[_T, list[_T]]:
-    """The fastest of ``repeat`` (at least one) calls of ``run`` by ``wall``, and all of them."""
-    runs = [run() for _ in range(max(1, repeat))]
-    return min(runs, key=wall), runs
-
-
 def _time_scp(program: FlatAttitudeProgram, settings: SCPSettings, x0: np.ndarray, repeat: int) -> SCPResult:
     """Fastest of ``repeat`` SCP runs from ``x0``."""
     runs = [solve_scp(program, settings, x0=x0) for _ in range(max(1, repeat))]
@@ -105,7 +85,7 @@ def _scp_row(nodes: int, backend: str, program: FlatAttitudeProgram, settings: S
     try:
         r = _time_scp(program, settings, x0, repeat)
     except Exception as exc:  # noqa: BLE001 - one failing backend must not abort the benchmark
-        return BenchRow(nodes, method, f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}",
+        return BenchRow(nodes, method, f"failed: {one_line(f'{type(exc).__name__}: {exc}')}",
                         message=f"{type(exc).__name__}: {exc}")
     return BenchRow(nodes, method, r.status, r.objective, r.iterations, r.wall_time_s, r.convexify_time_s,
                     r.solver_time_s, r.overhead_time_s, ok=r.status == "converged", message=r.message)
@@ -116,7 +96,7 @@ def _ipopt_row(nodes: int, problem: FlatAttitudeProblem, x0: np.ndarray, repeat:
     try:
         runs = [solve_flat_attitude_ipopt(problem, x0, IPOPT_TOLERANCE) for _ in range(max(1, repeat))]
     except Exception as exc:  # noqa: BLE001 - report and go on
-        return BenchRow(nodes, "ipopt", f"failed: {_one_line(f'{type(exc).__name__}: {exc}')}",
+        return BenchRow(nodes, "ipopt", f"failed: {one_line(f'{type(exc).__name__}: {exc}')}",
                         message=f"{type(exc).__name__}: {exc}")
     best = min(runs, key=lambda r: r.wall_time_s)
     return BenchRow(nodes, "ipopt", best.status, best.objective, best.iterations, best.wall_time_s,
@@ -173,39 +153,9 @@ def _text_table(rows: Sequence[BenchRow]) -> str:
     return "\n".join(lines)
 
 
-def _markdown_grid(columns: Sequence[str], align: Sequence[str], body: Sequence[Sequence[str]]) -> str:
-    """A markdown table: header ``columns``, alignment row ``align`` (``":---"``, ``"---:"``), rows of ``body``."""
-    lines = ["| " + " | ".join(columns) + " |", "| " + " | ".join(align) + " |"]
-    lines += ["| " + " | ".join(c.replace("|", "\\|") for c in row) + " |" for row in body]
-    return "\n".join(lines)
-
-
 def _markdown_table(rows: Sequence[BenchRow]) -> str:
     align = ["---:", ":---", ":---"] + ["---:"] * (len(COLUMNS) - 3)
-    return _markdown_grid(COLUMNS, align, [r.cells() for r in rows])
-
-
-def _version(package: str) -> str:
-    try:
-        return importlib.metadata.version(package)
-    except importlib.metadata.PackageNotFoundError:
-        return "not installed"
-
-
-def _environment_lines(packages: Sequence[str]) -> list[str]:
-    """Markdown bullets: machine, ``packages``' versions, BLAS/OpenMP thread variables, date (UTC)."""
-    machine = platform.processor() or platform.machine()
-    versions = ", ".join(f"{p} {_version(p)}" for p in packages)
-    threads = ", ".join(f"{v}={os.environ.get(v, 'unset')}" for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"))
-    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    return [
-        f"- Machine: {machine}, {os.cpu_count()} logical CPUs ({platform.platform()}, "
-        f"Python {platform.python_version()})",
-        f"- Versions: {versions}",
-        f"- BLAS/OpenMP threads: {threads} (numpy's BLAS is multi-threaded unless limited; on a busy machine "
-        "that slows the SCP's many small dense products)",
-        f"- Date: {when}",
-    ]
+    return markdown_grid(COLUMNS, align, [r.cells() for r in rows])
 
 
 def _command(problem_path: str | PathLike[str], nodes_list: Sequence[int], repeat: int,
@@ -231,14 +181,14 @@ def _notes(rows: Sequence[BenchRow]) -> list[str]:
     for r in rows:
         if not r.ok:
             status = "failed" if r.status.startswith("failed") else r.status
-            lines.append(f"N = {r.nodes}, {r.method}: {status}: {_one_line(r.message, 200)}")
+            lines.append(f"N = {r.nodes}, {r.method}: {status}: {one_line(r.message, 200)}")
     return lines
 
 
 def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLike[str],
               ipopt_note: str | None) -> str:
     machine = platform.processor() or platform.machine()
-    versions = ", ".join(f"{p} {_version(p)}" for p in ("numpy", "clarabel", "osqp", "casadi"))
+    versions = ", ".join(f"{p} {package_version(p)}" for p in ("numpy", "clarabel", "osqp", "casadi"))
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     header = [
         f"# convexguid benchmark: SCP vs IPOPT on `{Path(problem_path).name}`",
@@ -267,20 +217,12 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
               backends: Sequence[str], output_path: str | PathLike[str] | None = None) -> int:
     """Time the SCP (each backend) and IPOPT on ``problem_path`` for every grid size in ``nodes_list``.
 
-    Other families are passed on: ``rendezvous`` to
-    :func:`convexguid.bench_rendezvous.run_rendezvous_bench` (``nodes_list`` and ``backends`` do
-    not apply), ``quaternion_attitude`` to :func:`convexguid.bench_attitude.run_attitude_bench`
-    (``nodes_list`` = Hermite-Simpson interval counts; ``backends`` does not apply, the SCP uses
-    the file's backend).
-
     Parameters
     ----------
     problem_path : str or path-like
-        ``flat_attitude`` (or ``rendezvous``, ``quaternion_attitude``) problem file.
+        ``flat_attitude`` problem file.
     nodes_list : sequence of int or None
-        Polynomial degrees :math:`N` to benchmark; ``None``, or :data:`FLAT_DEFAULT_NODES` (what the
-        command line passes when ``--nodes`` is not given) for a family other than ``flat_attitude``,
-        means that family's default.
+        Polynomial degrees :math:`N` to benchmark; ``None`` means :data:`FLAT_DEFAULT_NODES`.
     repeat : int
         Timed runs per case; the fastest is reported.
     backends : sequence of str
@@ -291,18 +233,8 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
     Returns
     -------
     int
-        Exit code: 0 for ``flat_attitude``; for the other families, their runner's.
+        Exit code: 0.
     """
-    family = load_problem(problem_path, []).family
-    if family == "rendezvous":
-        from convexguid.bench_rendezvous import run_rendezvous_bench
-
-        return run_rendezvous_bench(problem_path, repeat, output_path)
-    if family == "quaternion_attitude":
-        from convexguid.bench_attitude import DEFAULT_INTERVALS, run_attitude_bench
-
-        default = nodes_list is None or tuple(nodes_list) == FLAT_DEFAULT_NODES
-        return run_attitude_bench(problem_path, DEFAULT_INTERVALS if default else nodes_list, repeat, output_path)
     if nodes_list is None:
         nodes_list = FLAT_DEFAULT_NODES
     with_ipopt = casadi_available()
@@ -327,3 +259,8 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
         path.write_text(_markdown(rows, command, problem_path, ipopt_note), encoding="utf-8")
         print(f"table written to {path}")
     return 0
+
+
+def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
+    """``convexguid bench`` on a ``flat_attitude`` file: :func:`run_bench` with the command line's arguments."""
+    return run_bench(problem_path, args.nodes, args.repeat, args.backends, args.output)

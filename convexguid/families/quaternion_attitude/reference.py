@@ -1,9 +1,9 @@
 """IPOPT reference for the quaternion attitude transcription (independent of the SCP code's maps).
 
-The nonlinear program of :mod:`convexguid.formulations.quaternion_attitude` is solved once
+The nonlinear program of :mod:`convexguid.families.quaternion_attitude.program` is solved once
 more with CasADi + IPOPT (exact Hessians). Only the variable *layout* (node-major rows
 ``[q (4, scalar-last), omega (3), u (3)]`` for ``K + 1`` nodes, then :math:`t_f` when the final
-time is free), the case data (:class:`~convexguid.formulations.quaternion_attitude.AttitudeCase`)
+time is free), the case data (:class:`~convexguid.families.quaternion_attitude.program.AttitudeCase`)
 and the numeric initial guess are shared with the SCP code. The rigid-body dynamics, the
 Hermite-Simpson defects, the pointing-cone cosines and the forbidden-attitude rows are written
 again here in CasADi symbols, so a slip in either implementation shows up as a different optimum
@@ -71,10 +71,10 @@ from typing import Any
 
 import numpy as np
 
-from convexguid.formulations.quaternion_attitude import NODE, NX, AttitudeCase
-from convexguid.reference.ipopt_flat import ReferenceResult, casadi_available
+from convexguid.families.quaternion_attitude.program import NODE, NX, AttitudeCase
+from convexguid.reference import ReferenceResult
 
-__all__ = ["casadi_available", "solve_quaternion_attitude_ipopt"]
+__all__ = ["solve_quaternion_attitude_ipopt"]
 
 
 def _dynamics_function(ca: Any, inertia: np.ndarray) -> Any:
@@ -132,7 +132,7 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
     Returns
     -------
     ReferenceResult
-        ``x`` in :class:`~convexguid.formulations.quaternion_attitude.QuaternionProgram`'s layout
+        ``x`` in :class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`'s layout
         (nodes raveled, then :math:`t_f` for minimum time), ``objective`` the final time (s) or the
         energy :math:`\\int|u|^2 dt` (N^2 m^2 s), IPOPT status and iteration count, solve and setup times.
 

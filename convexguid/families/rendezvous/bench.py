@@ -3,16 +3,16 @@
 In one run, each method solves the problem ``repeat`` times and the fastest run is reported:
 
 - ``lcvx``: the lossless-convexification SOCP on the problem's ``discretization.grid_steps``
-  zero-order-hold grid (:func:`convexguid.formulations.rendezvous_lcvx.solve_lcvx`), one
+  zero-order-hold grid (:func:`convexguid.families.rendezvous.lcvx.solve_lcvx`), one
   convex solve whose optimum is global for that grid;
-- ``scp_arcs``: Wang & Tang's burn/coast NLP (:class:`~convexguid.formulations.rendezvous_arcs.ArcsProgram`)
+- ``scp_arcs``: Wang & Tang's burn/coast NLP (:class:`~convexguid.families.rendezvous.arcs.ArcsProgram`)
   by the SCP engine (:func:`convexguid.scp.engine.solve_scp`) with the problem's solver settings,
   from :meth:`ArcsProgram.initial_guess`;
 - ``ipopt``: the same NLP, written independently in CasADi and solved by IPOPT with exact
-  Hessians (:func:`convexguid.reference.solve_rendezvous_arcs_ipopt`) from the same initial
+  Hessians (:func:`convexguid.families.rendezvous.reference.solve_rendezvous_arcs_ipopt`) from the same initial
   guess, when ``casadi`` is installed.
 
-Run it as ``python -m convexguid.bench_rendezvous problems/wang2003_rendezvous.yaml --repeat 3``.
+Run it as ``python -m convexguid.families.rendezvous.bench problems/wang2003_rendezvous.yaml --repeat 3``.
 
 References
 ----------
@@ -32,11 +32,12 @@ from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 
-from convexguid.bench import _best_of, _environment_lines, _markdown_grid, _one_line, cell
-from convexguid.formulations.rendezvous import Rendezvous, RendezvousPlan, build_case
-from convexguid.formulations.rendezvous_arcs import ArcsProgram
-from convexguid.formulations.rendezvous_lcvx import solve_lcvx
-from convexguid.reference import casadi_available, solve_rendezvous_arcs_ipopt
+from convexguid.bench_common import best_of, cell, environment_lines, markdown_grid, one_line
+from convexguid.families.rendezvous.arcs import ArcsProgram
+from convexguid.families.rendezvous.case import Rendezvous, RendezvousPlan, build_case
+from convexguid.families.rendezvous.lcvx import solve_lcvx
+from convexguid.families.rendezvous.reference import solve_rendezvous_arcs_ipopt
+from convexguid.reference import casadi_available
 from convexguid.scp.engine import solve_scp
 from convexguid.scp.problem import SCPSettings
 from convexguid.solution import write_text_atomic
@@ -87,7 +88,7 @@ class RendezvousBenchRow:
 
 def _failed(method: str, exc: Exception) -> RendezvousBenchRow:
     text = f"{type(exc).__name__}: {exc}"
-    return RendezvousBenchRow(method, f"failed: {_one_line(text)}", message=text)
+    return RendezvousBenchRow(method, f"failed: {one_line(text)}", message=text)
 
 
 def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> RendezvousBenchRow:
@@ -98,7 +99,7 @@ def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> Rendez
         return plan, time.perf_counter() - start
 
     try:
-        (plan, wall), _ = _best_of(repeat, run, lambda r: r[1])
+        (plan, wall), _ = best_of(repeat, run, lambda r: r[1])
     except Exception as exc:  # noqa: BLE001 - one failing method must not abort the benchmark
         return _failed("lcvx", exc)
     ok = plan.status == "converged"
@@ -109,7 +110,7 @@ def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> Rendez
 def _scp_row(program: ArcsProgram, settings: SCPSettings, repeat: int) -> RendezvousBenchRow:
     """``scp_arcs`` from the program's initial guess."""
     try:
-        r, _ = _best_of(repeat, lambda: solve_scp(program, settings), lambda r: r.wall_time_s)
+        r, _ = best_of(repeat, lambda: solve_scp(program, settings), lambda r: r.wall_time_s)
     except Exception as exc:  # noqa: BLE001 - report and go on
         return _failed("scp_arcs", exc)
     ok = r.status == "converged"
@@ -121,7 +122,7 @@ def _ipopt_row(program: ArcsProgram, repeat: int) -> RendezvousBenchRow:
     """IPOPT on the arcs NLP from the program's initial guess; ``setup s`` is the fastest model build."""
     x0 = program.initial_guess()
     try:
-        best, runs = _best_of(repeat, lambda: solve_rendezvous_arcs_ipopt(program, x0, IPOPT_TOLERANCE),
+        best, runs = best_of(repeat, lambda: solve_rendezvous_arcs_ipopt(program, x0, IPOPT_TOLERANCE),
                               lambda r: r.wall_time_s)
     except Exception as exc:  # noqa: BLE001 - report and go on
         return _failed("ipopt", exc)
@@ -186,7 +187,7 @@ def _notes(rows: Sequence[RendezvousBenchRow]) -> list[str]:
     for r in rows:
         if not r.ok:
             status = "failed" if r.status.startswith("failed") else r.status
-            lines.append(f"{r.method}: {status}: {_one_line(r.message, 200)}")
+            lines.append(f"{r.method}: {status}: {one_line(r.message, 200)}")
     return lines
 
 
@@ -194,20 +195,20 @@ def _markdown_table(rows: Sequence[RendezvousBenchRow]) -> str:
     lcvx = _by_method(rows, "lcvx")
     reference = lcvx.burn_time_s if lcvx is not None and lcvx.ok else None
     align = [":---", ":---"] + ["---:"] * (len(COLUMNS) - 2)
-    return _markdown_grid(COLUMNS, align, [r.cells(reference) for r in rows])
+    return markdown_grid(COLUMNS, align, [r.cells(reference) for r in rows])
 
 
 def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: str | PathLike[str], repeat: int,
                               grid_steps: int | None = None, ipopt_note: str | None = None,
                               output: str | PathLike[str] | None = None) -> str:
     """The benchmark as a markdown document: machine, versions, date, command, caption, table, notes."""
-    args = ["python", "-m", "convexguid.bench_rendezvous", str(problem_path), "--repeat", str(repeat)]
+    args = ["python", "-m", "convexguid.families.rendezvous.bench", str(problem_path), "--repeat", str(repeat)]
     command = shlex.join(args + (["--output", str(output)] if output is not None else []))
     steps = "the problem's `grid_steps`" if grid_steps is None else f"{grid_steps} steps"
     header = [
         f"# convexguid rendezvous benchmark: lcvx vs scp_arcs vs IPOPT on `{Path(problem_path).name}`",
         "",
-        *_environment_lines(("numpy", "scipy", "clarabel", "casadi")),
+        *environment_lines(("numpy", "scipy", "clarabel", "casadi")),
         f"- Command: `{command}`",
         "",
         f"Best of {repeat} runs per method, times in seconds. `lcvx`: one SOCP on {steps} (zero-order hold); "
@@ -260,14 +261,20 @@ def run_rendezvous_bench(problem_path: str | PathLike[str], repeat: int,
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m convexguid.bench_rendezvous PROBLEM [--repeat N] [--output FILE]``."""
-    parser = argparse.ArgumentParser(prog="python -m convexguid.bench_rendezvous", description=__doc__.split("\n")[0])
+    """``python -m convexguid.families.rendezvous.bench PROBLEM [--repeat N] [--output FILE]``."""
+    parser = argparse.ArgumentParser(prog="python -m convexguid.families.rendezvous.bench",
+                                     description=__doc__.split("\n")[0])
     parser.add_argument("problem", nargs="?", type=Path, default=Path("problems/wang2003_rendezvous.yaml"))
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per method (best is reported)")
     parser.add_argument("--output", type=Path, help="also write the table (markdown) here")
     args = parser.parse_args(argv)
     return run_rendezvous_bench(args.problem, args.repeat, args.output)
 
+
+
+def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
+    """``convexguid bench`` on a ``rendezvous`` file (``--nodes`` and ``--backends`` do not apply)."""
+    return run_rendezvous_bench(problem_path, args.repeat, args.output)
 
 if __name__ == "__main__":
     raise SystemExit(main())

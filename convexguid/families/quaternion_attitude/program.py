@@ -35,7 +35,7 @@ forbidden attitude :math:`|q_b \\cdot q| \\le \\cos((\\theta_m + m)/2)`, two row
 **Objectives.** Minimum time (:math:`\\min t_f`) or minimum energy at fixed :math:`t_f`
 (:math:`\\int |u|^2 dt` by Simpson's rule on the linear torque, as least-squares residuals).
 The objective's value at the initial guess (``objective_scale``) sets the unit of the
-exact-penalty weight (``scp_settings`` in :mod:`convexguid.formulations.quaternion_attitude_solve`),
+exact-penalty weight (``scp_settings`` in :mod:`convexguid.families.quaternion_attitude.solve`),
 so one weight serves a 0.04 N^2 m^2 s energy and a 100 s slew alike.
 
 References

@@ -35,7 +35,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.dynamics.clohessy_wiltshire import cw_stm, cw_stm_derivative
-from convexguid.formulations.rendezvous import BurnArc, Rendezvous, ThrustPlan
+from convexguid.families.rendezvous.case import BurnArc, Rendezvous, ThrustPlan
 from convexguid.scp.problem import (
     ConstraintBlock,
     Evaluation,

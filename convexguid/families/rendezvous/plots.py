@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from convexguid.formulations.rendezvous import AXES  # noqa: E402
+from convexguid.families.rendezvous.case import AXES  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
 

@@ -1,6 +1,6 @@
 """Plan, verify and summarise a ``quaternion_attitude`` problem: SCP (minimum time or energy) or path transfer.
 
-The SCP plans on the nodes of :class:`~convexguid.formulations.quaternion_attitude.QuaternionProgram`;
+The SCP plans on the nodes of :class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`;
 the plan's torque (linear between nodes) is then integrated with SciPy and every cone,
 the forbidden attitudes, the rate and torque boxes are checked on a dense grid. Where
 the path cuts a constraint between nodes, the node constraints are tightened by the
@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from convexguid.formulations.quaternion_attitude import (
+from convexguid.families.quaternion_attitude.program import (
     AttitudeCase,
     Cone,
     Forbidden,

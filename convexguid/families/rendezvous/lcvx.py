@@ -32,7 +32,7 @@ import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram, make_backend
 from convexguid.dynamics.clohessy_wiltshire import cw_zoh
-from convexguid.formulations.rendezvous import BurnArc, Rendezvous, RendezvousPlan, ThrustPlan, state_columns
+from convexguid.families.rendezvous.case import BurnArc, Rendezvous, RendezvousPlan, ThrustPlan, state_columns
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Trajectory
 

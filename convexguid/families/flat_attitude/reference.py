@@ -1,6 +1,6 @@
 """IPOPT reference for the flat-output attitude problem (independent of the SCP code's maps).
 
-The transcription of :mod:`convexguid.formulations.flat_attitude` is solved once more as a
+The transcription of :mod:`convexguid.families.flat_attitude.program` is solved once more as a
 single nonlinear program with CasADi + IPOPT (exact Hessians). Only the *transcription*
 is shared with the SCP code: the mapped-Chebyshev differentiation matrices, the
 quadrature weights, the path-interpolation matrix (nodes, check points, extra points)
@@ -37,51 +37,13 @@ control", Math. Programming Computation 11, 2019.
 
 from __future__ import annotations
 
-import importlib.util
 import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from convexguid.formulations.flat_attitude import FlatAttitudeProblem, FlatAttitudeProgram
-
-
-@dataclass(frozen=True)
-class ReferenceResult:
-    """Outcome of a reference NLP solve.
-
-    Attributes
-    ----------
-    x : numpy.ndarray
-        Optimal decision vector in the layout of the program solved (flat attitude: node-major
-        Euler angles, rad; rendezvous arcs: the :class:`ArcLayout` vector, SI units).
-    objective : float
-        Optimal objective (flat attitude: energy, N^2 m^2 s; rendezvous: total burn time, s).
-    iterations : int
-        IPOPT iterations.
-    status : str
-        IPOPT's ``return_status`` (e.g. ``Solve_Succeeded``).
-    success : bool
-        Whether IPOPT reports success.
-    wall_time_s : float
-        Wall time of the solve call only, s.
-    setup_time_s : float
-        Wall time of building the CasADi NLP and the IPOPT solver object, s.
-    """
-
-    x: np.ndarray
-    objective: float
-    iterations: int
-    status: str
-    success: bool
-    wall_time_s: float
-    setup_time_s: float
-
-
-def casadi_available() -> bool:
-    """Whether the optional dependency ``casadi`` can be imported."""
-    return importlib.util.find_spec("casadi") is not None
+from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram
+from convexguid.reference import ReferenceResult
 
 
 def _body_rates(ca: Any, z: Any, zd: Any) -> Any:

@@ -1,8 +1,8 @@
 """IPOPT reference for the rendezvous burn/coast transcription (independent of the SCP code's maps).
 
-The nonlinear program of :mod:`convexguid.formulations.rendezvous_arcs` (Wang & Tang 2003,
+The nonlinear program of :mod:`convexguid.families.rendezvous.arcs` (Wang & Tang 2003,
 eqs. 4-11) is solved once more with CasADi + IPOPT (exact Hessians). Only the variable
-*layout* (:class:`~convexguid.formulations.rendezvous_arcs.ArcLayout`), the constant matrices
+*layout* (:class:`~convexguid.families.rendezvous.arcs.ArcLayout`), the constant matrices
 :math:`A, B` of eq. (2) (:func:`~convexguid.dynamics.clohessy_wiltshire.cw_matrices`) and the
 numeric initial guess are shared with the SCP code. The Hermite-Simpson defects, the
 Clohessy-Wiltshire free motion of the coast arcs and the unit-direction constraints are
@@ -46,11 +46,11 @@ from typing import Any
 import numpy as np
 
 from convexguid.dynamics.clohessy_wiltshire import cw_matrices
-from convexguid.formulations.rendezvous import Rendezvous
-from convexguid.formulations.rendezvous_arcs import ArcLayout, ArcsProgram
-from convexguid.reference.ipopt_flat import ReferenceResult, casadi_available
+from convexguid.families.rendezvous.arcs import ArcLayout, ArcsProgram
+from convexguid.families.rendezvous.case import Rendezvous
+from convexguid.reference import ReferenceResult
 
-__all__ = ["ArcsReferenceResult", "casadi_available", "cw_free_motion", "solve_rendezvous_arcs_ipopt"]
+__all__ = ["ArcsReferenceResult", "cw_free_motion", "solve_rendezvous_arcs_ipopt"]
 
 
 ArcsReferenceResult = ReferenceResult

@@ -3,11 +3,13 @@
 For every interval count :math:`K` (:math:`K + 1` nodes) of ``intervals_list`` the problem file is
 loaded with ``discretization.intervals = K``, ``method: scp``, ``initial_guess: eigenaxis``, and
 
-- ``scp time``: minimum time by :func:`~convexguid.formulations.quaternion_attitude_solve.solve_quaternion_attitude`
+- ``scp time``: minimum time by
+  :func:`~convexguid.families.quaternion_attitude.solve.solve_quaternion_attitude`
   (SCP from the eigenaxis guess, dense verification, node-constraint tightening and re-solve when
   the dense check fails);
 - ``ipopt time``: the same NLP written independently in CasADi
-  (:func:`convexguid.reference.ipopt_attitude.solve_quaternion_attitude_ipopt`, exact Hessian),
+  (:func:`convexguid.families.quaternion_attitude.reference.solve_quaternion_attitude_ipopt`,
+  exact Hessian),
   from the same eigenaxis guess and initial final time;
 - ``ipopt time @scp``: that NLP again, started from the SCP's solution: when it ends below
   ``ipopt time``, the NLP has several local optima and the eigenaxis start found a worse one;
@@ -17,7 +19,7 @@ loaded with ``discretization.intervals = K``, ``method: scp``, ``initial_guess: 
 The path-transfer planner (:func:`convexguid.planners.path_transfer.plan_path_transfer`), which
 does not depend on :math:`K`, is timed once. Every case runs ``repeat`` times and the fastest run
 is reported. Run it as ``convexguid bench problems/wang_multicone_time.yaml --repeat 3`` or
-``python -m convexguid.bench_attitude problems/wang_multicone_time.yaml --repeat 3``.
+``python -m convexguid.families.quaternion_attitude.bench problems/wang_multicone_time.yaml --repeat 3``.
 """
 
 from __future__ import annotations
@@ -31,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench import _best_of, _environment_lines, _markdown_grid, _one_line, cell
-from convexguid.formulations.quaternion_attitude import AttitudeCase, eigenaxis_start
-from convexguid.formulations.quaternion_attitude_solve import (
+from convexguid.bench_common import FLAT_DEFAULT_NODES, best_of, cell, environment_lines, markdown_grid, one_line
+from convexguid.families.quaternion_attitude.program import AttitudeCase, eigenaxis_start
+from convexguid.families.quaternion_attitude.solve import (
     build_case,
     path_transfer_problem,
     solve_quaternion_attitude,
@@ -118,7 +120,7 @@ class AttitudeBenchRow:
 
 def _failed(intervals: int | None, solver: str, objective: str, exc: Exception) -> AttitudeBenchRow:
     text = f"{type(exc).__name__}: {exc}"
-    return AttitudeBenchRow(intervals, solver, objective, f"failed: {_one_line(text)}", message=text)
+    return AttitudeBenchRow(intervals, solver, objective, f"failed: {one_line(text)}", message=text)
 
 
 def _spec(problem_path: str | PathLike[str], intervals: int, tf: float | None = None):
@@ -140,7 +142,7 @@ def _solution_nodes(sol: Solution) -> np.ndarray:
 def _path_transfer_row(case: AttitudeCase, repeat: int) -> AttitudeBenchRow:
     """The path-transfer planner's maneuver time; ``wall s`` is its planning time."""
     try:
-        plan, _ = _best_of(repeat, lambda: plan_path_transfer(path_transfer_problem(case)),
+        plan, _ = best_of(repeat, lambda: plan_path_transfer(path_transfer_problem(case)),
                            lambda p: p.planning_time_s)
     except Exception as exc:  # noqa: BLE001 - one failing method must not abort the benchmark
         return _failed(None, _PATH, "time", exc)
@@ -152,7 +154,7 @@ def _scp_row(spec, objective: str, repeat: int) -> tuple[AttitudeBenchRow, Solut
     """:func:`solve_quaternion_attitude` on ``spec``: ``wall s`` the whole call, ``SCP s`` its SCP iterations."""
     K = spec.discretization.intervals
     try:
-        sol, _ = _best_of(repeat, lambda: solve_quaternion_attitude(spec), lambda s: s.wall_time_s)
+        sol, _ = best_of(repeat, lambda: solve_quaternion_attitude(spec), lambda s: s.wall_time_s)
     except Exception as exc:  # noqa: BLE001 - report and go on
         return _failed(K, _SCP, objective, exc), None
     ok = sol.status == "converged"
@@ -169,11 +171,11 @@ def _scp_row(spec, objective: str, repeat: int) -> tuple[AttitudeBenchRow, Solut
 def _ipopt_row(case: AttitudeCase, intervals: int, objective: str, repeat: int, solver: str = _IPOPT,
                start: tuple[np.ndarray, float] | None = None) -> AttitudeBenchRow:
     """IPOPT on the NLP of ``case`` from ``start`` (default: the eigenaxis guess); ``setup s`` the fastest build."""
-    from convexguid.reference.ipopt_attitude import solve_quaternion_attitude_ipopt
+    from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt
 
     guess, tf_guess = eigenaxis_start(case, intervals) if start is None else start
     try:
-        best, runs = _best_of(repeat, lambda: solve_quaternion_attitude_ipopt(case, intervals, guess, tf_guess,
+        best, runs = best_of(repeat, lambda: solve_quaternion_attitude_ipopt(case, intervals, guess, tf_guess,
                                                                               tol=IPOPT_TOLERANCE),
                               lambda r: r.wall_time_s)
     except Exception as exc:  # noqa: BLE001 - report and go on
@@ -329,7 +331,7 @@ def _notes(rows: Sequence[AttitudeBenchRow]) -> list[str]:
         if not r.ok:
             status = "failed" if r.status.startswith("failed") else r.status
             where = "" if r.intervals is None else f"K = {r.intervals}, "
-            lines.append(f"{where}{r.method}: {status}: {_one_line(r.message, 200)}")
+            lines.append(f"{where}{r.method}: {status}: {one_line(r.message, 200)}")
         elif r.verified is False:
             lines.append(f"K = {r.intervals}, {r.method}: converged but the dense verification FAILED")
     return lines
@@ -348,7 +350,7 @@ def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str 
     header = [
         f"# convexguid attitude benchmark: SCP vs IPOPT on `{Path(problem_path).name}` against the grid size",
         "",
-        *_environment_lines(("numpy", "scipy", "clarabel", "casadi")),
+        *environment_lines(("numpy", "scipy", "clarabel", "casadi")),
         f"- Command: `{_command(problem_path, intervals_list, repeat, output)}`",
         "",
         f"Best of {repeat} runs per case, times in seconds. `K`: Hermite-Simpson intervals (K + 1 nodes). "
@@ -368,7 +370,7 @@ def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str 
     if ipopt_note:
         header += ["", ipopt_note]
     align = ["---:", ":---", ":---"] + ["---:"] * (len(COLUMNS) - 3)
-    table = _markdown_grid(COLUMNS, align, [r.cells() for r in rows])
+    table = markdown_grid(COLUMNS, align, [r.cells() for r in rows])
     footer = [f"- {line}" for line in _notes(rows)]
     return "\n".join(header + ["", table, ""] + (footer + [""] if footer else []))
 
@@ -397,8 +399,10 @@ def run_attitude_bench(problem_path: str | PathLike[str], intervals_list: Sequen
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m convexguid.bench_attitude PROBLEM [--nodes K ...] [--repeat N] [--output FILE]``."""
-    parser = argparse.ArgumentParser(prog="python -m convexguid.bench_attitude", description=__doc__.split("\n")[0])
+    """``python -m convexguid.families.quaternion_attitude.bench PROBLEM [--nodes K ...] [--repeat N]
+    [--output FILE]``."""
+    parser = argparse.ArgumentParser(prog="python -m convexguid.families.quaternion_attitude.bench",
+                                     description=__doc__.split("\n")[0])
     parser.add_argument("problem", nargs="?", type=Path, default=Path("problems/wang_multicone_time.yaml"))
     parser.add_argument("--nodes", type=int, nargs="+", default=list(DEFAULT_INTERVALS),
                         help="Hermite-Simpson interval counts K")
@@ -407,6 +411,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     return run_attitude_bench(args.problem, args.nodes, args.repeat, args.output)
 
+
+
+def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
+    """``convexguid bench`` on a ``quaternion_attitude`` file: ``--nodes`` are interval counts ``K``.
+
+    The command line's default ``--nodes`` (:data:`~convexguid.bench_common.FLAT_DEFAULT_NODES`, flat-attitude
+    degrees) means :data:`DEFAULT_INTERVALS`; ``--backends`` does not apply (the SCP uses the file's backend).
+    """
+    default = args.nodes is None or tuple(args.nodes) == FLAT_DEFAULT_NODES
+    return run_attitude_bench(problem_path, DEFAULT_INTERVALS if default else args.nodes, args.repeat, args.output)
 
 if __name__ == "__main__":
     raise SystemExit(main())

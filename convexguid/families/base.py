@@ -1,0 +1,56 @@
+"""The contract between a problem family and the rest of convexguid.
+
+A family is one folder ``convexguid/families/<name>/`` whose ``__init__`` exports ``FAMILY``, a
+:class:`Family`. The registry (:mod:`convexguid.families`) lists them; the loader, the API, the
+command line and the report reach a family only through it. A family's ``__init__`` imports only
+its spec model at module level; ``solve``, ``plot`` and ``bench`` import the heavy modules (SCP,
+matplotlib, CasADi) when they are called.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from convexguid.spec.common import ProblemBase
+
+if TYPE_CHECKING:
+    from convexguid.scp.engine import IterationRecord
+    from convexguid.solution import Solution
+
+@dataclass(frozen=True)
+class Family:
+    """One problem family.
+
+    Attributes
+    ----------
+    name : str
+        The value of the problem file's ``family`` key.
+    spec_model : type of ProblemBase
+        Pydantic model of the problem file (its ``family`` field is ``Literal[name]``).
+    solve : callable
+        ``solve(spec, log) -> Solution``; for a simulated family, the closed-loop simulation.
+    plot : callable
+        ``plot(solution, out_dir) -> list[Path]``; imports matplotlib only when called.
+    verification_method : str
+        How the solution is checked, as the report words it ("Dense verification (N points, <this>)").
+    simulated : bool
+        Run by ``convexguid simulate`` (a controller in closed loop) instead of planned by ``convexguid solve``.
+    key_figures : tuple of (summary key, label)
+        Summary figures the validation report lists under each case of the family.
+    bench : callable or None
+        ``bench(problem_path, args) -> int`` (exit code) for ``convexguid bench``; None if the family has none.
+    """
+
+    name: str
+    spec_model: type[ProblemBase]
+    solve: Callable[[ProblemBase, Callable[[IterationRecord], None] | None], Solution]
+    plot: Callable[[Solution, Path], list[Path]]
+    verification_method: str
+    simulated: bool = False
+    key_figures: tuple[tuple[str, str], ...] = ()
+    bench: Callable[[str | PathLike[str], argparse.Namespace], int] | None = None

@@ -1,0 +1,43 @@
+"""Family ``potential_function``: closed-loop slew with forbidden-attitude avoidance (Guo, Li, Ma 2011).
+
+Simulated, not planned: ``convexguid simulate`` runs the controller (:mod:`convexguid.control.potential_function`)
+on the reaction-wheel plant (:mod:`convexguid.sim`). Modules here: ``spec`` (problem file) and ``plots``.
+"""
+
+from __future__ import annotations
+
+from convexguid.families.base import Family
+from convexguid.families.potential_function.spec import PotentialFunctionProblem
+
+
+def _solve(spec, log=None):
+    """Simulate the closed loop (``log`` is unused: there are no SCP iterations)."""
+    from convexguid.sim.runner import simulate_problem
+
+    return simulate_problem(spec)
+
+
+def _plot(solution, out_dir):
+    from convexguid.families.potential_function.plots import plot_potential_function
+    from convexguid.report.plots import save_figure
+
+    return plot_potential_function(solution, out_dir, save_figure)
+
+
+FAMILY = Family(
+    name="potential_function",
+    spec_model=PotentialFunctionProblem,
+    solve=_solve,
+    plot=_plot,
+    verification_method="closed-loop simulation",
+    simulated=True,
+    key_figures=(
+        ("maneuver_time_1deg_s", "time to within 1 deg of the command, s"),
+        ("maneuver_time_01deg_s", "time to within 0.1 deg of the command, s"),
+        ("min_theta_b_deg", "smallest angle to the forbidden attitude, deg"),
+        ("theta_m_deg", "forbidden half-angle theta_m, deg"),
+        ("max_abs_torque_Nm", "largest torque component, N m"),
+        ("energy_N2m2s", "energy integral of squared torque, N^2 m^2 s"),
+        ("final_error_deg", "final attitude error, deg"),
+    ),
+)

@@ -1,0 +1,99 @@
+"""Plan a ``rendezvous`` problem with ``scp_arcs`` or ``lcvx``, verify it by propagation, certify ``scp_arcs``.
+
+See :mod:`convexguid.families.rendezvous.case` for the problem, the two methods and the verification.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from convexguid.families.rendezvous.arcs import ArcsProgram
+from convexguid.families.rendezvous.case import (
+    BurnArc,
+    Rendezvous,
+    RendezvousPlan,
+    ThrustPlan,
+    build_case,
+    propagate_thrust,
+    state_columns,
+    verify_track,
+)
+from convexguid.families.rendezvous.lcvx import solve_lcvx
+from convexguid.scp.engine import IterationRecord, solve_scp
+from convexguid.scp.problem import SCPSettings
+from convexguid.solution import Solution, Trajectory
+
+
+def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
+    """Plan with ``spec.method``, verify by propagation, and (``scp_arcs``) certify against ``lcvx``."""
+    start = time.perf_counter()
+    case = build_case(spec)
+    disc = spec.discretization
+    lcvx = solve_lcvx(case, disc.grid_steps, spec.solver.backend) if (
+        spec.method == "lcvx" or spec.certify) else None
+    if spec.method == "lcvx":
+        plan = lcvx
+    elif lcvx is not None and lcvx.status == "infeasible":
+        # the convex relaxation admits every thrust history the arcs could fly: no need to search
+        plan = replace(lcvx, message=f"certified by lcvx on {disc.grid_steps} steps: {lcvx.message}",
+                       size=_arcs_program(case, spec).size(), iterations=0)
+    else:
+        plan = _solve_arcs(case, spec, log)
+    track = propagate_thrust(case, plan.thrust, spec.verification.grid_points, spec.verification.rtol,
+                             spec.verification.atol)
+    verification = verify_track(case, track, spec.verification) if plan.status == "converged" else None
+    extras = {"burn_time_s": plan.objective if plan.status == "converged" else None,
+              "num_burns": len(plan.burns),
+              "burn_arcs_s": [[b.start_s, b.end_s] for b in plan.burns],
+              "accel_mps2": case.accel, "mean_motion_radps": case.mean_motion}
+    extras.update(plan.extras)
+    if spec.method == "scp_arcs" and lcvx is not None:
+        extras.update(_certificate(plan, lcvx))
+    return Solution(
+        problem=spec.name, family=spec.family, method=spec.method, status=plan.status,
+        objective=plan.objective, iterations=plan.iterations, size=plan.size,
+        wall_time_s=time.perf_counter() - start, solver=spec.solver.backend, message=plan.message,
+        verification=verification, history=plan.history, nodes=plan.nodes,
+        dense=Trajectory(track.t, state_columns(case.dim, track.states, track.u, case.accel)),
+        extras=extras, timing=plan.timing)
+
+
+def _arcs_program(case: Rendezvous, spec):
+    return ArcsProgram(case, spec.discretization.burns, spec.discretization.subintervals_per_burn)
+
+
+def _solve_arcs(case: Rendezvous, spec, log) -> RendezvousPlan:
+    s = spec.solver
+    program = _arcs_program(case, spec)
+    settings = SCPSettings.from_spec(s)
+    result = solve_scp(program, settings, log)
+    states, dirs, durations = program.layout.split(result.x)
+    times = program.node_times(durations)
+    nodes = Trajectory(times, state_columns(case.dim, states, dirs, case.accel))
+    burns = program.burn_arcs(result.x)
+    extras = {"arc_durations_s": durations.tolist(),
+              "planned_direction_norm_min": _interpolated_norm_min(times, dirs, burns)}
+    return RendezvousPlan(result.status, result.message, result.objective, result.iterations, program.size(),
+                          burns, program.thrust_plan(result.x), nodes,
+                          result.timing(),
+                          extras, result.history)
+
+
+def _interpolated_norm_min(times: np.ndarray, dirs: np.ndarray, burns: tuple[BurnArc, ...]) -> float:
+    """Smallest norm of the linearly interpolated direction on the burns (1 at the nodes)."""
+    plan = ThrustPlan.from_nodes(times, dirs, burns, normalize=False)
+    samples = [seg.command(t) for seg in plan.segments for t in np.linspace(seg.start, seg.end, 21)]
+    return float(min((np.linalg.norm(u) for u in samples), default=1.0))
+
+
+def _certificate(arcs: RendezvousPlan, lcvx: RendezvousPlan) -> dict:
+    """Gap of the ``scp_arcs`` burn time to the ``lcvx`` global optimum on the fixed grid."""
+    if lcvx.status != "converged" or arcs.status != "converged":
+        return {"lcvx_status": lcvx.status, "lcvx_burn_time_s": None, "lcvx_gap_rel": None}
+    return {"lcvx_status": lcvx.status, "lcvx_burn_time_s": lcvx.objective,
+            "lcvx_gap_rel": (arcs.objective - lcvx.objective) / lcvx.objective,
+            "lcvx_burn_arcs_s": [[b.start_s, b.end_s] for b in lcvx.burns]}
