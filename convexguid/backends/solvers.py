@@ -129,7 +129,10 @@ class QpsolversBackend(Backend):
         prog = self._program
         P_full = (prog.P + sp.triu(prog.P, k=1).T).tocsc()
         nz = prog.cones.zero
-        problem = qpsolvers.Problem(P_full, prog.q, prog.A[nz:], prog.b[nz:], prog.A[:nz], prog.b[:nz])
+        # qpsolvers wants None, not an empty block, for a missing equality or inequality set
+        eq = (prog.A[:nz], prog.b[:nz]) if nz else (None, None)
+        ineq = (prog.A[nz:], prog.b[nz:]) if prog.A.shape[0] > nz else (None, None)
+        problem = qpsolvers.Problem(P_full, prog.q, *ineq, *eq)
         start = time.perf_counter()
         sol = qpsolvers.solve_problem(problem, solver=self.solver)
         elapsed = time.perf_counter() - start

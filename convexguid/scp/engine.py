@@ -1,91 +1,68 @@
-"""The sequential convex programming loop shared by every problem family.
+"""The sequential convex programming iteration shared by every problem family.
 
-Each iteration reads as a recipe: evaluate the nonlinear maps and their Jacobians
-at the iterate (convexify), assemble the trust-region subproblem with penalized
-slacks (:mod:`convexguid.scp.assembly`), solve it with the chosen backend, and
-accept or reject the step from the ratio of actual to predicted decrease of the
-exact-penalty merit function
+:class:`SCPAlgorithm` is an explicit state machine: :meth:`~SCPAlgorithm.initialize` turns a
+start point into an :class:`~convexguid.scp.state.IterationState`, and each
+:meth:`~SCPAlgorithm.step` reads as a recipe:
 
-.. math::
+1. convexify: the nonlinear maps and their Jacobians at the iterate (already in the state);
+2. assemble the trust-region subproblem with penalized slacks (:mod:`convexguid.scp.assembly`)
+   and solve it with the chosen backend (:class:`~convexguid.scp.policies.BackendRetry` on a
+   numerical failure);
+3. judge the step by the ratio of actual to predicted decrease of the exact-penalty merit
 
-    \\phi(x) = f(x) + \\rho \\Big( \\sum \\max(0, g(x)) + \\sum |e(x)| \\Big).
+   .. math::
 
-The objective's residuals are linearized (Gauss-Newton), so the subproblem is a
-convex QP whose fixed point is a KKT point of the nonlinear program. A program may
-also supply the curvature of its equality constraints, a nonnegative diagonal
-:math:`H \\approx \\sum_i \\lambda_i \\nabla^2 e_i(x)` evaluated with the multipliers of the
-previous subproblem (``lagrangian_curvature``); it enters the model as
-:math:`\\tfrac12 d^T H d`, an S\\ :math:`\\ell_1`\\ QP step (Fletcher 1985). Without it a purely
-linear objective gives linear programs, which crawl when the optimum is not a vertex. The trust
-radius shrinks on poor agreement and grows when the model is trusted and the step
-reaches the radius (the classical rule, e.g. Nocedal & Wright, Alg. 4.1).
+       \\phi(x) = f(x) + \\rho \\Big( \\sum \\max(0, g(x)) + \\sum |e(x)| \\Big),
 
-Stops with ``converged`` when the scaled step or the predicted decrease falls
-below the tolerance at a feasible iterate. Stalling with constraints violated
-first multiplies the penalty weight by ten (an exact penalty needs a weight above
-the multipliers), up to ``penalty_max``; ``infeasible`` when the iterates still stall
-with constraints violated (or the hard linear constraints are inconsistent);
-``max_iterations``; or ``solver_error`` when the backend fails numerically more than
-:data:`MAX_BACKEND_FAILURES` times in a row (each failure is retried with a smaller trust region).
+   trying a :class:`~convexguid.scp.policies.SecondOrderCorrection` when it is poor;
+4. accept or reject, update the radius (:class:`~convexguid.scp.policies.TrustRegionPolicy`);
+5. stop, or raise the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) when the
+   iterates stall with constraints violated.
+
+The objective's residuals are linearized (Gauss-Newton), so the subproblem is a convex QP whose
+fixed point is a KKT point of the nonlinear program. A program may also supply the curvature of
+its equality constraints, a nonnegative diagonal :math:`H \\approx \\sum_i \\lambda_i \\nabla^2 e_i(x)`
+evaluated with the multipliers of the previous subproblem (``lagrangian_curvature``); it enters
+the model as :math:`\\tfrac12 d^T H d`, an S :math:`\\ell_1` QP step (Fletcher 1985). Without it a
+purely linear objective gives linear programs, which crawl when the optimum is not a vertex.
+
+Statuses: ``converged`` (scaled step or predicted decrease below the tolerance at a feasible
+iterate); ``infeasible`` only with a certificate: the hard linear constraints admit no point (an
+elastic LP, :func:`~convexguid.scp.restoration.restore_start`), or the elastic phase-1 problem
+(:class:`~convexguid.scp.restoration.ElasticPhase1`), run when the iterates stall infeasible at
+the largest penalty, itself stalls with the violation positive; ``max_iterations``; and
+``solver_error`` when the backend fails more often in a row than the retry policy allows.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from convexguid.backends import make_backend
+from convexguid.backends.base import Backend, BackendResult
 from convexguid.scp.assembly import SubproblemAssembler
+from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
+from convexguid.scp.restoration import ElasticPhase1, restore_start
+from convexguid.scp.state import IterationRecord, IterationState, SCPResult, merge_results
 
+__all__ = ["IterationRecord", "SCPAlgorithm", "SCPResult", "merge_results", "solve_scp"]
 
-@dataclass(frozen=True)
-class IterationRecord:
-    """One row of the iteration table."""
+Log = Callable[[IterationRecord], None]
 
-    iteration: int
-    objective: float
-    violation: float
-    step: float
-    trust_radius: float
-    ratio: float
-    accepted: bool
-    solver_status: str
-    solver_iterations: int
-    time_s: float
+MAX_PHASE1_RUNS = 3
+"""Phase-1 restorations one run may make before a stall with constraints violated ends it."""
 
+NEARLY_FEASIBLE = 100.0
+"""A stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once.
 
-@dataclass
-class SCPResult:
-    """Outcome of :func:`solve_scp`."""
-
-    x: np.ndarray
-    status: str
-    objective: float
-    max_violation: float
-    violations: dict[str, float]
-    iterations: int
-    history: list[IterationRecord] = field(default_factory=list)
-    message: str = ""
-    wall_time_s: float = 0.0
-    convexify_time_s: float = 0.0
-    solver_time_s: float = 0.0
-
-    @property
-    def overhead_time_s(self) -> float:
-        return max(0.0, self.wall_time_s - self.convexify_time_s - self.solver_time_s)
-
-    def timing(self) -> dict[str, float]:
-        """The time split reported in a solution's summary (``timing``), s."""
-        return {"scp_s": self.wall_time_s, "convexify_s": self.convexify_time_s,
-                "solver_s": self.solver_time_s, "overhead_s": self.overhead_time_s}
-
-
-MAX_BACKEND_FAILURES = 3
-"""Consecutive numerical failures of the convex solver (each retried with a 4x smaller trust region) tolerated."""
+So small a violation is at the accuracy of the subproblem's solution; raising the penalty only
+makes the merit function noisier, while minimising the violation alone removes it in a few steps.
+"""
 
 
 def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
@@ -100,151 +77,20 @@ def violation_by_block(ev: Evaluation) -> dict[str, float]:
     return {k: max(v, 0.0) for k, v in out.items()}
 
 
+def max_violation(ev: Evaluation) -> float:
+    return max(violation_by_block(ev).values(), default=0.0)
+
+
+def describe_violations(ev: Evaluation) -> str:
+    """``"name by value unit; ..."`` for every violated block, or ``"none"``."""
+    units = {b.name: b.unit for b in (*ev.inequalities, *ev.equalities)}
+    parts = [f"{k} by {v:.3g} {units[k]}".rstrip() for k, v in violation_by_block(ev).items() if v > 0]
+    return "; ".join(parts) or "none"
+
+
 def _penalty_sum(ev: Evaluation) -> float:
     total = sum(float(np.maximum(b.values, 0.0).sum()) for b in ev.inequalities)
     return total + sum(float(np.abs(b.values).sum()) for b in ev.equalities)
-
-
-def _project_on_equalities(program: NonconvexProgram, x: np.ndarray) -> np.ndarray:
-    """Least-change correction making ``x`` satisfy the hard linear equalities."""
-    lin = program.linear_constraints()
-    if lin.A.shape[0] == 0:
-        return x
-    correction, *_ = np.linalg.lstsq(lin.A, lin.b - lin.A @ x, rcond=None)
-    return x + correction
-
-
-def solve_scp(program: NonconvexProgram, settings: SCPSettings,
-              log: Callable[[IterationRecord], None] | None = None,
-              x0: np.ndarray | None = None) -> SCPResult:
-    """Run the SCP loop on ``program`` from ``x0`` (default: its initial guess)."""
-    start = time.perf_counter()
-    weights, cost = program.residual_weights(), program.linear_cost()
-    x = _project_on_equalities(program, program.initial_guess() if x0 is None else np.asarray(x0, float))
-    convexify = solver_time = 0.0
-
-    outputs = program.output_constraints()
-
-    def evaluate(point: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
-        """The program's own evaluation, and one that also lists the output constraints' values."""
-        raw = program.evaluate(point, jacobians)
-        return raw, replace(raw, inequalities=outputs.blocks_at(raw.residuals) + raw.inequalities)
-
-    def merit_at(point: np.ndarray, ev: Evaluation) -> float:
-        return objective_value(ev, weights, cost, point) + rho * _penalty_sum(ev)
-
-    t = time.perf_counter()
-    raw, ev = evaluate(x, jacobians=True)
-    convexify += time.perf_counter() - t
-    curvature = getattr(program, "lagrangian_curvature", None)
-    assembler = SubproblemAssembler(program.num_variables, raw, program.linear_constraints(), outputs,
-                                    program.variable_scale(), cost, weights, curvature=curvature is not None)
-    multipliers: dict[str, np.ndarray] = {}
-    radius, rho = settings.trust_region, settings.penalty
-    merit = merit_at(x, ev)
-    backend = None
-    history: list[IterationRecord] = []
-    failures = 0
-    status, message = "max_iterations", f"no convergence in {settings.max_iterations} iterations"
-
-    for it in range(1, settings.max_iterations + 1):
-        hessian = None
-        if curvature is not None and multipliers:
-            hessian = np.maximum(curvature(x, multipliers), 0.0)
-        program_k = assembler.build(x, raw, radius, rho, hessian)
-        if backend is None:
-            backend = make_backend(settings.backend, program_k, settings.backend_tolerance)
-        else:
-            backend.update(program_k)
-        res = backend.solve()
-        solver_time += res.solve_time_s
-        if not res.usable:
-            if res.status == "infeasible":
-                status, message = "infeasible", "the hard linear constraints (boundary conditions) are inconsistent"
-                break
-            failures += 1
-            if failures > MAX_BACKEND_FAILURES:
-                status, message = "solver_error", f"backend {settings.backend} returned {res.status} " \
-                                                  f"{failures} times in a row"
-                break
-            # a numerical failure of the backend: retry a smaller, better-conditioned subproblem
-            radius = max(0.25 * radius, settings.trust_region_min)
-            history.append(IterationRecord(it, objective_value(ev, weights, cost, x), _max_violation(ev), 0.0, radius,
-                                           float("nan"), False, res.status, res.iterations,
-                                           time.perf_counter() - start))
-            if log is not None:
-                log(history[-1])
-            continue
-        failures = 0
-        d = assembler.step(res.x)
-        if curvature is not None and res.z is not None:
-            multipliers = _split_by_block(assembler.equality_multipliers(res.z), raw)
-        predicted = merit - (program_k.objective(res.x) + cost @ x)
-        t = time.perf_counter()
-        x_new = x + d
-        raw_new, ev_new = evaluate(x_new, jacobians=False)
-        merit_new = merit_at(x_new, ev_new)
-        convexify += time.perf_counter() - t
-        ratio = _ratio(merit - merit_new, predicted)
-        if ratio < settings.expand_ratio and (raw.equalities or raw.inequalities):
-            # Second-order correction: the linear model cannot see the curvature of the
-            # constraints, so a good step can look bad (Maratos effect). Re-solve the same
-            # subproblem with each constraint's constant shifted to what the trial point
-            # showed, and judge the corrected step against the original prediction.
-            backend.update(assembler.build(x, _shifted_constants(raw, raw_new, d), radius, rho, hessian))
-            res_soc = backend.solve()
-            solver_time += res_soc.solve_time_s
-            if res_soc.usable:
-                t = time.perf_counter()
-                x_soc = x + assembler.step(res_soc.x)
-                _, ev_soc = evaluate(x_soc, jacobians=False)
-                merit_soc = merit_at(x_soc, ev_soc)
-                convexify += time.perf_counter() - t
-                ratio_soc = _ratio(merit - merit_soc, predicted)
-                if ratio_soc > ratio:
-                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
-                    d = x_new - x
-        step = float(np.max(np.abs(d) / program.variable_scale()))
-        accepted = ratio >= settings.accept_ratio
-        if accepted:
-            t = time.perf_counter()
-            x, merit = x_new, merit_new
-            raw, ev = evaluate(x, jacobians=True)
-            convexify += time.perf_counter() - t
-        at_boundary = step >= 0.99 * radius
-        if ratio < settings.shrink_ratio:
-            radius = max(0.25 * step, settings.trust_region_min) if step > 0 else radius * 0.25
-        elif ratio > settings.expand_ratio and at_boundary:
-            radius = min(2.0 * radius, settings.trust_region_max)
-        record = IterationRecord(it, objective_value(ev, weights, cost, x), _max_violation(ev), step, radius,
-                                 ratio, accepted, res.status, res.iterations, time.perf_counter() - start)
-        history.append(record)
-        if log is not None:
-            log(record)
-        small_step = step <= settings.tolerance
-        small_decrease = 0 <= predicted <= settings.tolerance * max(1.0, abs(merit))
-        if small_step or small_decrease or radius <= settings.trust_region_min:
-            if _max_violation(ev) <= settings.feasibility_tolerance:
-                status, message = "converged", "step and predicted decrease below tolerance"
-                break
-            if rho < settings.penalty_max:
-                # A stationary point of the penalty function that violates the constraints:
-                # the penalty is below the multipliers; raise it and go on.
-                rho = min(10.0 * rho, settings.penalty_max)
-                merit = merit_at(x, ev)
-                radius = max(radius, settings.trust_region)
-                continue
-            status = "infeasible"
-            message = "iterates stalled with constraints violated: " + _describe_violations(ev)
-            break
-
-    if status == "max_iterations" and _max_violation(ev) > settings.feasibility_tolerance:
-        message += "; constraints still violated: " + _describe_violations(ev)
-    return SCPResult(x=x, status=status, objective=objective_value(ev, weights, cost, x),
-                     max_violation=_max_violation(ev), violations=violation_by_block(ev),
-                     iterations=len(history), history=history, message=message,
-                     wall_time_s=time.perf_counter() - start, convexify_time_s=convexify,
-                     solver_time_s=solver_time)
 
 
 def _ratio(actual: float, predicted: float) -> float:
@@ -252,22 +98,230 @@ def _ratio(actual: float, predicted: float) -> float:
     return actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
 
 
-def _shifted_constants(at_x: Evaluation, at_trial: Evaluation, d: np.ndarray) -> Evaluation:
-    """Constraint blocks at ``x`` whose values are :math:`c(x + d) - \\nabla c(x)\\, d` (Jacobians kept).
+class SCPAlgorithm:
+    """The SCP loop on one program: ``state = initialize(x0)``, then ``step(state)`` until finished.
 
-    Linearizing these about ``x`` gives :math:`c(x + d) + \\nabla c(x)(d' - d)`: the subproblem
-    solved again with them (Fletcher's second-order correction) steers the new step ``d'`` so
-    that the curvature error seen at the trial point is cancelled to first order.
-    Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 15.6; Fletcher, *Practical Methods
-    of Optimization*, 2nd ed., Sec. 14.4.
+    ``phase1`` marks the elastic phase-1 run (objective dropped): a stall with constraints
+    violated then ends ``infeasible`` (the certificate) instead of raising the penalty.
     """
 
-    def shift(blocks_x, blocks_trial):
-        return tuple(replace(bx, values=bt.values - bx.jacobian @ d) for bx, bt in zip(blocks_x, blocks_trial,
-                                                                                      strict=True))
+    def __init__(self, program: NonconvexProgram, settings: SCPSettings, log: Log | None = None,
+                 phase1: bool = False) -> None:
+        self.program, self.settings, self.log, self.phase1 = program, settings, log, phase1
+        self.trust_region = TrustRegionPolicy.from_settings(settings)
+        self.penalty = PenaltyPolicy.from_settings(settings)
+        self.correction = SecondOrderCorrection.from_settings(settings)
+        self.retry = BackendRetry.from_settings(settings)
+        self.weights, self.cost = program.residual_weights(), program.linear_cost()
+        self.outputs = program.output_constraints()
+        self.scale = program.variable_scale()
+        self.curvature = getattr(program, "lagrangian_curvature", None)
+        self.assembler: SubproblemAssembler | None = None
+        self.backend: Backend | None = None
+        self.objective_at_start = 0.0
 
-    return replace(at_x, inequalities=shift(at_x.inequalities, at_trial.inequalities),
-                   equalities=shift(at_x.equalities, at_trial.equalities))
+    # --- evaluation -------------------------------------------------------------------------
+    def _evaluate(self, state: IterationState | None, x: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
+        """The program's own evaluation, and one that also lists the output constraints' values."""
+        t = time.perf_counter()
+        raw = self.program.evaluate(x, jacobians)
+        ev = replace(raw, inequalities=self.outputs.blocks_at(raw.residuals) + raw.inequalities)
+        if state is not None:
+            state.convexify_time_s += time.perf_counter() - t
+        return raw, ev
+
+    def _objective(self, ev: Evaluation, x: np.ndarray) -> float:
+        return objective_value(ev, self.weights, self.cost, x)
+
+    def _merit(self, ev: Evaluation, x: np.ndarray, rho: float) -> float:
+        return self._objective(ev, x) + rho * _penalty_sum(ev)
+
+    # --- the loop ---------------------------------------------------------------------------
+    def initialize(self, x0: np.ndarray | None = None, penalty: float | None = None) -> IterationState:
+        """The state at ``x0`` (default: the program's guess) moved onto the hard linear constraints.
+
+        If no point meets them the state is finished at once as ``infeasible``, with the
+        elastic program's certificate (:func:`~convexguid.scp.restoration.restore_start`).
+        """
+        started = time.perf_counter()
+        x = np.asarray(self.program.initial_guess() if x0 is None else x0, dtype=float)
+        restored = restore_start(self.program, x)
+        infeasible = not restored.feasible
+        x = x if infeasible else restored.x
+        raw, ev = self._evaluate(None, x, jacobians=True)
+        self.objective_at_start = self._objective(ev, x)
+        rho = self.penalty.initial(self.objective_at_start) if penalty is None else penalty
+        state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
+                               merit=self._merit(ev, x, rho), radius=self.trust_region.initial, penalty=rho,
+                               started=started)
+        if infeasible:
+            state.finish("infeasible", "certificate: " + restored.certificate)
+        if self.assembler is None:
+            self.assembler = SubproblemAssembler(self.program.num_variables, raw, self.program.linear_constraints(),
+                                                 self.outputs, self.scale, self.cost, self.weights,
+                                                 curvature=self.curvature is not None)
+        return state
+
+    def _solve_subproblem(self, state: IterationState, ev: Evaluation,
+                          hessian: np.ndarray | None) -> tuple[BackendResult, float]:
+        """The backend's answer, and the subproblem's model of the merit after its step."""
+        program_k = self.assembler.build(state.x, ev, state.radius, state.penalty, hessian)
+        if self.backend is None:
+            self.backend = make_backend(self.settings.backend, program_k, self.settings.backend_tolerance)
+        else:
+            self.backend.update(program_k)
+        result = self.backend.solve()
+        state.solver_time_s += result.solve_time_s
+        model = program_k.objective(result.x) + self.cost @ state.x if result.usable else float("nan")
+        return result, model
+
+    def _record(self, state: IterationState, step: float, ratio: float, accepted: bool,
+                result: BackendResult) -> None:
+        record = IterationRecord(state.iteration, state.objective, max_violation(state.ev), step, state.radius, ratio,
+                                 accepted, result.status, result.iterations, time.perf_counter() - state.started)
+        state.history.append(record)
+        if self.log is not None:
+            self.log(record)
+
+    def step(self, state: IterationState) -> IterationState:
+        """One SCP iteration (see the module docstring); returns ``state`` updated."""
+        if state.finished:
+            return state
+        s = self.settings
+        state.iteration += 1
+        hessian = None
+        if self.curvature is not None and state.multipliers:
+            hessian = np.maximum(self.curvature(state.x, state.multipliers), 0.0)
+        result, model = self._solve_subproblem(state, state.raw, hessian)
+        if not result.usable:
+            # Numerical trouble (the start meets the hard constraints, so d = 0 is always feasible):
+            # retry a smaller, better-conditioned subproblem.
+            state.failures += 1
+            state.radius = self.trust_region.after_failure(state.radius)
+            self._record(state, 0.0, float("nan"), False, result)
+            if not self.retry.retry(state.failures):
+                state.finish("solver_error", f"backend {s.backend} returned {result.status} "
+                                             f"{state.failures} times in a row")
+            return self._check_limit(state)
+        state.failures = 0
+        d = self.assembler.step(result.x)
+        if self.curvature is not None and result.z is not None:
+            state.multipliers = _split_by_block(self.assembler.equality_multipliers(result.z), state.raw)
+        predicted = state.merit - model
+        x_new = state.x + d
+        raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
+        merit_new = self._merit(ev_new, x_new, state.penalty)
+        ratio = _ratio(state.merit - merit_new, predicted)
+        if self.correction.wanted(ratio, state.raw):
+            corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, raw_new, d),
+                                                  hessian)
+            if corrected.usable:
+                x_soc = state.x + self.assembler.step(corrected.x)
+                _, ev_soc = self._evaluate(state, x_soc, jacobians=False)
+                merit_soc = self._merit(ev_soc, x_soc, state.penalty)
+                ratio_soc = _ratio(state.merit - merit_soc, predicted)
+                if ratio_soc > ratio:
+                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
+                    d = x_new - state.x
+        step = float(np.max(np.abs(d) / self.scale, initial=0.0))
+        accepted = ratio >= s.accept_ratio
+        if accepted:
+            state.x, state.merit = x_new, merit_new
+            state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
+            state.objective = self._objective(state.ev, state.x)
+        state.radius = self.trust_region.update(state.radius, ratio, step)
+        self._record(state, step, ratio, accepted, result)
+        small_step = step <= s.tolerance
+        # the main loop measures decrease against max(1, |merit|); phase 1's merit is the violation itself,
+        # so a decrease is small only relative to what is left to remove
+        unit = abs(state.merit) if self.phase1 else max(1.0, abs(state.merit))
+        small_decrease = 0 <= predicted <= s.tolerance * unit
+        if small_step or small_decrease or self.trust_region.collapsed(state.radius):
+            self._stalled(state)
+        return self._check_limit(state)
+
+    def _stalled(self, state: IterationState) -> None:
+        """The iterates stopped moving: converged if feasible, else raise the penalty or certify."""
+        if max_violation(state.ev) <= self.settings.feasibility_tolerance:
+            state.finish("converged", "trust region collapsed: no decrease found near a feasible point"
+                         if self.trust_region.collapsed(state.radius) else
+                         "step and predicted decrease below tolerance")
+            return
+        if self.phase1:
+            state.finish("infeasible", "the elastic phase-1 problem stalls with the constraints still violated: "
+                         + describe_violations(state.ev))
+            return
+        nearly_feasible = max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance
+        rho = None if nearly_feasible else self.penalty.escalated(state.penalty, self.objective_at_start)
+        if rho is not None:
+            # A stationary point of the penalty function that violates the constraints:
+            # the penalty is below the multipliers; raise it and go on.
+            state.penalty = rho
+            state.merit = self._merit(state.ev, state.x, rho)
+            state.radius = self.trust_region.after_penalty_change(state.radius)
+            return
+        # at the largest penalty, or stalled by round-off just above the tolerance: restore feasibility directly
+        self._phase1(state)
+
+    def _phase1(self, state: IterationState) -> None:
+        """At the largest penalty and still infeasible: minimise the violation alone from here.
+
+        A feasible point found this way restarts the main loop from it; a phase-1 stall with the
+        violation positive is the certificate of (local) infeasibility.
+        """
+        if state.phase1_runs >= MAX_PHASE1_RUNS:
+            state.finish("max_iterations", "iterates stalled with constraints violated after a phase-1 restart: "
+                         + describe_violations(state.ev))
+            return
+        state.phase1_runs += 1
+        settings = replace(self.settings, penalty=1.0, penalty_max=1.0, penalty_unit="absolute")
+        phase1 = SCPAlgorithm(ElasticPhase1(self.program), settings, self.log, phase1=True)
+        p1 = phase1.initialize(state.x)
+        while not p1.finished:
+            phase1.step(p1)
+        state.iteration += p1.iteration
+        state.history.extend(replace(r, iteration=state.iteration - p1.iteration + r.iteration) for r in p1.history)
+        state.solver_time_s += p1.solver_time_s
+        state.convexify_time_s += p1.convexify_time_s
+        if p1.status == "converged":
+            state.x, state.raw, state.ev = p1.x, p1.raw, p1.ev
+            state.objective = self._objective(state.ev, state.x)
+            state.merit = self._merit(state.ev, state.x, state.penalty)
+            state.radius = self.trust_region.initial
+            return
+        if p1.status == "infeasible":
+            state.x, state.raw, state.ev = p1.x, p1.raw, p1.ev
+            state.objective = self._objective(state.ev, state.x)
+            state.finish("infeasible", "certificate: " + p1.message + " (locally: no nearby point is feasible)")
+            return
+        state.finish(p1.status, "phase-1 (least violation) ended " + p1.status + ": " + p1.message)
+
+    def _check_limit(self, state: IterationState) -> IterationState:
+        if not state.finished and state.iteration >= self.settings.max_iterations:
+            message = f"no convergence in {self.settings.max_iterations} iterations"
+            if max_violation(state.ev) > self.settings.feasibility_tolerance:
+                message += "; constraints still violated: " + describe_violations(state.ev)
+            state.finish("max_iterations", message)
+        return state
+
+    def result(self, state: IterationState) -> SCPResult:
+        return SCPResult(x=state.x, status=state.status or "max_iterations", objective=state.objective,
+                         max_violation=max_violation(state.ev), violations=violation_by_block(state.ev),
+                         iterations=state.iteration, history=state.history, message=state.message,
+                         wall_time_s=time.perf_counter() - state.started, convexify_time_s=state.convexify_time_s,
+                         solver_time_s=state.solver_time_s)
+
+    def run(self, x0: np.ndarray | None = None) -> SCPResult:
+        state = self.initialize(x0)
+        while not state.finished:
+            self.step(state)
+        return self.result(state)
+
+
+def solve_scp(program: NonconvexProgram, settings: SCPSettings, log: Log | None = None,
+              x0: np.ndarray | None = None) -> SCPResult:
+    """Run the SCP loop on ``program`` from ``x0`` (default: its initial guess)."""
+    return SCPAlgorithm(program, settings, log).run(x0)
 
 
 def _split_by_block(values: np.ndarray, ev: Evaluation) -> dict[str, np.ndarray]:
@@ -277,22 +331,3 @@ def _split_by_block(values: np.ndarray, ev: Evaluation) -> dict[str, np.ndarray]
         out[block.name] = values[start: start + block.values.size]
         start += block.values.size
     return out
-
-
-def _max_violation(ev: Evaluation) -> float:
-    return max(violation_by_block(ev).values(), default=0.0)
-
-
-def _describe_violations(ev: Evaluation) -> str:
-    units = {b.name: b.unit for b in (*ev.inequalities, *ev.equalities)}
-    parts = [f"{k} by {v:.3g} {units[k]}".rstrip() for k, v in violation_by_block(ev).items() if v > 0]
-    return "; ".join(parts) or "none"
-
-
-def merge_results(first: SCPResult, second: SCPResult) -> SCPResult:
-    """``second`` continued from ``first`` (e.g. after adding constraint points): histories and times add up."""
-    history = first.history + [replace(r, iteration=r.iteration + first.iterations) for r in second.history]
-    return replace(second, history=history, iterations=len(history),
-                   wall_time_s=first.wall_time_s + second.wall_time_s,
-                   convexify_time_s=first.convexify_time_s + second.convexify_time_s,
-                   solver_time_s=first.solver_time_s + second.solver_time_s)

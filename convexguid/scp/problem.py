@@ -135,7 +135,10 @@ class SCPSettings:
 
     ``tolerance`` bounds the scaled step and the relative predicted decrease at
     convergence; ``feasibility_tolerance`` bounds the worst nonlinear-constraint
-    violation (in each block's own unit).
+    violation (in each block's own unit). ``penalty`` and ``penalty_max`` are counted in
+    ``penalty_unit``: ``"absolute"``, or ``"objective"`` (units of the objective at the start
+    point, see :class:`~convexguid.scp.policies.PenaltyPolicy`). ``max_backend_failures``
+    numerical failures of the convex solver in a row are retried with a smaller trust region.
     """
 
     backend: str = "clarabel"
@@ -143,14 +146,17 @@ class SCPSettings:
     tolerance: float = 1e-6
     feasibility_tolerance: float = 1e-7
     trust_region: float = 0.5
-    trust_region_min: float = 1e-9
+    trust_region_min: float = 1e-7
     trust_region_max: float = 1e3
     penalty: float = 1e3
     penalty_max: float = 1e7
+    penalty_unit: str = "absolute"
     accept_ratio: float = 1e-4
     shrink_ratio: float = 0.25
     expand_ratio: float = 0.75
     backend_tolerance: float = 1e-8
+    max_backend_failures: int = 3
+    second_order_correction: bool = True
 
     @classmethod
     def from_spec(cls, solver, **overrides) -> SCPSettings:

@@ -1,0 +1,139 @@
+"""The named rules of the SCP step: trust region, penalty weight, second-order correction, backend retry.
+
+Each policy is a small object built from :class:`~convexguid.scp.problem.SCPSettings`; the
+engine asks it one question at a time (how far may the next step go, how heavy is the
+penalty, is a correction worth a second solve, may a failed solve be retried), so a rule can
+be read, tested and replaced on its own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from convexguid.scp.problem import Evaluation, SCPSettings
+
+
+@dataclass(frozen=True)
+class TrustRegionPolicy:
+    """Box trust region in scaled variables with the classical ratio test.
+
+    The radius shrinks to a quarter of the step on poor agreement (ratio below ``shrink``)
+    and doubles when the model is trusted (ratio above ``expand``) and the step reached the
+    boundary (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 4.1).
+    """
+
+    initial: float
+    minimum: float
+    maximum: float
+    shrink: float
+    expand: float
+
+    @classmethod
+    def from_settings(cls, s: SCPSettings) -> TrustRegionPolicy:
+        return cls(s.trust_region, s.trust_region_min, s.trust_region_max, s.shrink_ratio, s.expand_ratio)
+
+    def update(self, radius: float, ratio: float, step: float) -> float:
+        if ratio < self.shrink:
+            # a quarter of the step actually taken (a backend may overshoot the box by its tolerance)
+            return max(0.25 * min(step, radius), self.minimum) if step > 0 else 0.25 * radius
+        if ratio > self.expand and step >= 0.99 * radius:
+            return min(2.0 * radius, self.maximum)
+        return radius
+
+    def after_failure(self, radius: float) -> float:
+        """A smaller, better-conditioned subproblem after the backend failed numerically."""
+        return max(0.25 * radius, self.minimum)
+
+    def after_penalty_change(self, radius: float) -> float:
+        """Room to move again once the merit function has changed."""
+        return max(radius, self.initial)
+
+    def collapsed(self, radius: float) -> bool:
+        return radius <= self.minimum
+
+
+@dataclass(frozen=True)
+class PenaltyPolicy:
+    """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty, and its escalation.
+
+    With ``unit = "objective"`` the configured weights are counted in units of
+    :math:`|f(x_0)|`, the objective at the start point: a weight of 30 then means "30 times
+    the start's maneuver time (or energy) per unit of constraint violation", whatever the
+    problem's scale. With ``unit = "absolute"`` they are used as given. An exact penalty needs
+    a weight above the constraint multipliers; when the iterates stall infeasible the weight is
+    multiplied by ``factor`` up to its maximum (Nocedal & Wright, Sec. 17.2).
+    """
+
+    start: float
+    maximum: float
+    unit: str
+    factor: float = 10.0
+
+    @classmethod
+    def from_settings(cls, s: SCPSettings) -> PenaltyPolicy:
+        return cls(s.penalty, s.penalty_max, s.penalty_unit)
+
+    def scale(self, objective_at_start: float) -> float:
+        """The unit of the weights: 1, or :math:`|f(x_0)|` (at least 1e-12)."""
+        return max(abs(objective_at_start), 1e-12) if self.unit == "objective" else 1.0
+
+    def initial(self, objective_at_start: float) -> float:
+        return self.start * self.scale(objective_at_start)
+
+    def escalated(self, rho: float, objective_at_start: float) -> float | None:
+        """The next weight, or ``None`` if ``rho`` is already at the maximum."""
+        ceiling = self.maximum * self.scale(objective_at_start)
+        if rho >= ceiling * (1 - 1e-12):
+            return None
+        return min(self.factor * rho, ceiling)
+
+
+@dataclass(frozen=True)
+class SecondOrderCorrection:
+    """Fletcher's second-order correction, tried when a step's ratio is below ``threshold``.
+
+    The linear model cannot see the curvature of the constraints, so a good step can look bad
+    (the Maratos effect). The subproblem is solved again with each constraint's constant
+    shifted to what the trial point showed, :math:`c(x + d) - \\nabla c(x)\\, d`; linearizing
+    about ``x`` then gives :math:`c(x + d) + \\nabla c(x)(d' - d)`, so the corrected step cancels
+    the curvature error to first order. The corrected step is judged against the original
+    prediction and kept if its ratio is better. Nocedal & Wright, Sec. 15.6; Fletcher,
+    *Practical Methods of Optimization*, 2nd ed., Sec. 14.4.
+    """
+
+    threshold: float
+    enabled: bool = True
+
+    @classmethod
+    def from_settings(cls, s: SCPSettings) -> SecondOrderCorrection:
+        return cls(s.expand_ratio, s.second_order_correction)
+
+    def wanted(self, ratio: float, ev: Evaluation) -> bool:
+        return self.enabled and ratio < self.threshold and bool(ev.equalities or ev.inequalities)
+
+    @staticmethod
+    def shifted(at_x: Evaluation, at_trial: Evaluation, d: np.ndarray) -> Evaluation:
+        """Constraint blocks at ``x`` whose values are :math:`c(x + d) - \\nabla c(x)\\, d` (Jacobians kept)."""
+
+        def shift(blocks_x, blocks_trial):
+            return tuple(replace(bx, values=bt.values - bx.jacobian @ d)
+                         for bx, bt in zip(blocks_x, blocks_trial, strict=True))
+
+        return replace(at_x, inequalities=shift(at_x.inequalities, at_trial.inequalities),
+                       equalities=shift(at_x.equalities, at_trial.equalities))
+
+
+@dataclass(frozen=True)
+class BackendRetry:
+    """How many numerical failures of the convex solver in a row are retried (each with a smaller radius)."""
+
+    max_failures: int
+
+    @classmethod
+    def from_settings(cls, s: SCPSettings) -> BackendRetry:
+        return cls(s.max_backend_failures)
+
+    def retry(self, failures: int) -> bool:
+        return failures <= self.max_failures

@@ -1,0 +1,112 @@
+"""Start points the SCP can step from, and certificates when there are none.
+
+Every subproblem keeps the program's linear constraints ``A x = b, G x <= h`` hard, so a start
+point that breaks them by more than the trust radius would give a first subproblem with no
+solution. :func:`restore_start` moves the start to the nearest point (in the scaled norm of
+the trust region) that meets them; if no such point exists, an elastic linear program
+certifies it: its optimal total slack, the least violation any point can have, is positive.
+
+:class:`ElasticPhase1` is the nonlinear counterpart: the same program with its objective
+dropped, so the SCP minimises the :math:`\\ell_1` violation of the nonlinear constraints alone.
+When it stalls with the violation still positive, no nearby point is feasible (a local
+certificate of infeasibility; Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.2
+and 18.5 on elastic modes).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from convexguid.backends import Cones, ConicProgram, make_backend
+from convexguid.scp.problem import LinearConstraints, NonconvexProgram
+
+CERTIFYING_BACKEND = "clarabel"
+"""Interior-point solver used for the projection and the elastic program (accurate, reports infeasibility)."""
+
+
+@dataclass(frozen=True)
+class Restoration:
+    """A start point on the hard linear constraints, or the certificate that there is none."""
+
+    x: np.ndarray | None
+    moved: float
+    """Largest scaled change of any variable (0 when the start already complied)."""
+    certificate: str = ""
+
+    @property
+    def feasible(self) -> bool:
+        return self.x is not None
+
+
+def linear_violation(lin: LinearConstraints, x: np.ndarray) -> float:
+    """Worst violation of ``A x = b`` and ``G x <= h``, relative to ``1 + |rhs|``."""
+    eq = np.abs(lin.A @ x - lin.b) / (1 + np.abs(lin.b)) if lin.A.shape[0] else np.zeros(0)
+    ineq = (lin.G @ x - lin.h) / (1 + np.abs(lin.h)) if lin.G.shape[0] else np.zeros(0)
+    return float(max(np.max(eq, initial=0.0), np.max(ineq, initial=0.0)))
+
+
+def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 1e-9) -> Restoration:
+    """The point nearest ``x0`` on ``A x = b, G x <= h`` (scaled norm), or a certificate of inconsistency.
+
+    Solves :math:`\\min \\tfrac12 \\|v\\|^2` s.t. :math:`A(x_0 + S v) = b,\\ G(x_0 + S v) \\le h` with
+    :math:`S` the variable scale. If that has no solution, the elastic LP
+    :math:`\\min 1^T(p + n + s)` s.t. :math:`A S v + p - n = b - A x_0,\\ G S v - s \\le h - G x_0`,
+    :math:`p, n, s \\ge 0` gives the least total violation, which is the certificate.
+    """
+    lin = program.linear_constraints()
+    if linear_violation(lin, x0) <= tolerance:
+        return Restoration(x0, 0.0)
+    scale = program.variable_scale()
+    n, n_a, n_g = x0.size, lin.A.shape[0], lin.G.shape[0]
+    A = sp.csc_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))
+    rhs = np.concatenate([lin.b - lin.A @ x0, lin.h - lin.G @ x0])
+    projection = ConicProgram(sp.identity(n, format="csc"), np.zeros(n), A, rhs, Cones(zero=n_a, nonneg=n_g))
+    result = make_backend(CERTIFYING_BACKEND, projection, 1e-10).solve()
+    if result.usable:
+        v = result.x
+        return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
+    least = _least_violation(A, rhs, n_a, n_g)
+    return Restoration(None, float("nan"),
+                       f"the hard linear constraints (boundary conditions, bounds) are inconsistent: the elastic "
+                       f"linear program's least total violation is {least:.3g} > 0")
+
+
+def _least_violation(A: sp.csc_matrix, rhs: np.ndarray, n_a: int, n_g: int) -> float:
+    """Optimal value of the elastic LP of :func:`restore_start` (``A``, ``rhs`` already scaled and shifted)."""
+    n = A.shape[1]
+    eye_a, eye_g = sp.identity(n_a), sp.identity(n_g)
+    # variables [v, p, n, s]; rows: equalities, inequalities, then p, n, s >= 0
+    rows_eq = sp.hstack([A[:n_a], eye_a, -eye_a, sp.csr_matrix((n_a, n_g))])
+    rows_in = sp.hstack([A[n_a:], sp.csr_matrix((n_g, 2 * n_a)), -eye_g])
+    slack_rows = sp.hstack([sp.csr_matrix((2 * n_a + n_g, n)), -sp.identity(2 * n_a + n_g)])
+    M = sp.csc_matrix(sp.vstack([rows_eq, rows_in, slack_rows]))
+    b = np.concatenate([rhs, np.zeros(2 * n_a + n_g)])
+    num = n + 2 * n_a + n_g
+    q = np.concatenate([np.zeros(n), np.ones(2 * n_a + n_g)])
+    lp = ConicProgram(sp.csc_matrix((num, num)), q, M, b, Cones(zero=n_a, nonneg=n_g + 2 * n_a + n_g))
+    result = make_backend(CERTIFYING_BACKEND, lp, 1e-10).solve()
+    return float(result.objective) if result.usable else float("inf")
+
+
+class ElasticPhase1:
+    """``program`` with its objective dropped: the SCP then minimises the constraint violation alone.
+
+    Everything else (start, scale, linear and output constraints, nonlinear maps, curvature)
+    is the wrapped program's.
+    """
+
+    def __init__(self, program: NonconvexProgram) -> None:
+        self._program = program
+        self.num_variables = program.num_variables
+
+    def residual_weights(self) -> np.ndarray:
+        return np.zeros_like(self._program.residual_weights())
+
+    def linear_cost(self) -> np.ndarray:
+        return np.zeros(self.num_variables)
+
+    def __getattr__(self, name: str):
+        return getattr(self._program, name)

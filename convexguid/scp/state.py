@@ -1,0 +1,101 @@
+"""What the SCP loop carries from one iteration to the next, and what it hands back.
+
+:class:`IterationState` is the whole state of :class:`~convexguid.scp.engine.SCPAlgorithm`:
+the iterate and its evaluation, the merit value, the trust radius, the penalty weight, the
+multipliers of the last subproblem, the counters and clocks. A step reads it and returns it
+updated, so a run can be inspected, logged or resumed between any two iterations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from convexguid.scp.problem import Evaluation
+
+
+@dataclass(frozen=True)
+class IterationRecord:
+    """One row of the iteration table."""
+
+    iteration: int
+    objective: float
+    violation: float
+    step: float
+    trust_radius: float
+    ratio: float
+    accepted: bool
+    solver_status: str
+    solver_iterations: int
+    time_s: float
+
+
+@dataclass
+class IterationState:
+    """The state of one SCP run between two steps.
+
+    ``raw`` is the program's own evaluation at ``x`` (with Jacobians); ``ev`` adds the values of
+    the output constraints, so every constraint the merit function penalizes is in one place.
+    ``status`` stays ``None`` while the run goes on.
+    """
+
+    x: np.ndarray
+    raw: Evaluation
+    ev: Evaluation
+    objective: float
+    merit: float
+    radius: float
+    penalty: float
+    started: float
+    multipliers: dict[str, np.ndarray] = field(default_factory=dict)
+    iteration: int = 0
+    failures: int = 0
+    phase1_runs: int = 0
+    history: list[IterationRecord] = field(default_factory=list)
+    status: str | None = None
+    message: str = ""
+    convexify_time_s: float = 0.0
+    solver_time_s: float = 0.0
+
+    @property
+    def finished(self) -> bool:
+        return self.status is not None
+
+    def finish(self, status: str, message: str) -> None:
+        self.status, self.message = status, message
+
+
+@dataclass
+class SCPResult:
+    """Outcome of :func:`~convexguid.scp.engine.solve_scp`."""
+
+    x: np.ndarray
+    status: str
+    objective: float
+    max_violation: float
+    violations: dict[str, float]
+    iterations: int
+    history: list[IterationRecord] = field(default_factory=list)
+    message: str = ""
+    wall_time_s: float = 0.0
+    convexify_time_s: float = 0.0
+    solver_time_s: float = 0.0
+
+    @property
+    def overhead_time_s(self) -> float:
+        return max(0.0, self.wall_time_s - self.convexify_time_s - self.solver_time_s)
+
+    def timing(self) -> dict[str, float]:
+        """The time split reported in a solution's summary (``timing``), s."""
+        return {"scp_s": self.wall_time_s, "convexify_s": self.convexify_time_s,
+                "solver_s": self.solver_time_s, "overhead_s": self.overhead_time_s}
+
+
+def merge_results(first: SCPResult, second: SCPResult) -> SCPResult:
+    """``second`` continued from ``first`` (e.g. after a repair): histories and times add up."""
+    history = first.history + [replace(r, iteration=r.iteration + first.iterations) for r in second.history]
+    return replace(second, history=history, iterations=len(history),
+                   wall_time_s=first.wall_time_s + second.wall_time_s,
+                   convexify_time_s=first.convexify_time_s + second.convexify_time_s,
+                   solver_time_s=first.solver_time_s + second.solver_time_s)

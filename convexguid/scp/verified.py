@@ -1,0 +1,146 @@
+"""The check-repair-resolve loop every planned family shares.
+
+A converged SCP iterate satisfies its constraints at the points the program imposes them;
+what happens between them, and whether the discretized dynamics match the true ones, only a
+dense re-propagation tells. :func:`solve_verified` runs
+
+    solve -> dense check -> repairs the family proposes -> warm re-solve from the last plan
+
+until the check passes or the repair budget is spent. The family supplies two things
+(:class:`PlanChecker`): ``check(program, x)``, its dense verification of the plan ``x``, and
+``repair(program, x, check, attempt)``, a new program (tightened constraints, more check
+points, a finer mesh) with the plan carried over as its start, or ``None`` when it has nothing
+to offer. Every round is recorded (:class:`RepairRound`), so the summary shows what was repaired
+and the figures after it.
+
+Statuses: ``converged`` only when the dense check passed; ``unverified`` when the SCP converged
+but the check still fails when the budget runs out or no repair is left, naming the worst
+violations; otherwise the SCP's own status (``infeasible`` with its certificate,
+``max_iterations``, ``solver_error``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from convexguid.scp.engine import Log, SCPAlgorithm
+from convexguid.scp.problem import NonconvexProgram, SCPSettings
+from convexguid.scp.state import SCPResult, merge_results
+from convexguid.verify import Verification
+
+DEFAULT_REPAIR_BUDGET = 6
+"""Repair rounds tried after the first solve before a plan is reported ``unverified``."""
+
+
+@dataclass(frozen=True)
+class Check:
+    """A family's dense check of one plan: the verification and whatever the family keeps from it (a track)."""
+
+    verification: Verification
+    track: Any = None
+
+
+@dataclass(frozen=True)
+class Repair:
+    """What a family proposes after a failed check: a new program, the start carried over, and what changed."""
+
+    program: NonconvexProgram
+    x0: np.ndarray
+    description: str
+
+
+class PlanChecker(Protocol):
+    """The family's side of the loop."""
+
+    def check(self, program: NonconvexProgram, x: np.ndarray) -> Check: ...
+
+    def repair(self, program: NonconvexProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None: ...
+
+
+@dataclass(frozen=True)
+class RepairRound:
+    """One solve of the loop: what was repaired before it and the figures after it."""
+
+    round: int
+    repair: str
+    status: str
+    iterations: int
+    objective: float
+    passed: bool
+    max_violation: float
+    final_state_error: float
+    worst: str
+
+    def to_dict(self) -> dict:
+        return {"round": self.round, "repair": self.repair, "status": self.status, "iterations": self.iterations,
+                "objective": self.objective, "passed": self.passed, "max_violation": self.max_violation,
+                "final_state_error": self.final_state_error, "worst": self.worst}
+
+
+@dataclass
+class VerifiedSolve:
+    """The outcome of :func:`solve_verified`; ``result`` holds every round's iterations and times."""
+
+    program: NonconvexProgram
+    result: SCPResult
+    check: Check | None
+    status: str
+    message: str
+    rounds: list[RepairRound] = field(default_factory=list)
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.result.x
+
+
+def worst_violations(verification: Verification, count: int = 3) -> str:
+    """The largest violations of a dense check (``"name worst > bound"``), then the final-state errors."""
+    broken = sorted((c for c in verification.checks if c.violation > 0), key=lambda c: -c.violation)[:count]
+    parts = [f"{c.name} {c.worst:.6g} {'>' if c.sense == 'max' else '<'} {c.bound:g}" for c in broken]
+    parts += [f"{k} {v:.3g}" for k, v in verification.final_errors.items()]
+    return "; ".join(parts)
+
+
+def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: PlanChecker, log: Log | None = None,
+                   budget: int = DEFAULT_REPAIR_BUDGET, x0: np.ndarray | None = None,
+                   on_round: Callable[[RepairRound], None] | None = None) -> VerifiedSolve:
+    """Solve, check densely, repair and re-solve warm until verified or ``budget`` repairs are spent."""
+    result = SCPAlgorithm(program, settings, log).run(x0)
+    rounds: list[RepairRound] = []
+    what = "first solve"
+    for attempt in range(budget + 1):
+        if result.status not in ("converged", "max_iterations"):
+            return VerifiedSolve(program, result, None, result.status, result.message, rounds)
+        check = checker.check(program, result.x)
+        v = check.verification
+        rounds.append(RepairRound(attempt, what, result.status, result.iterations, result.objective, v.passed,
+                                  v.max_violation, v.final_state_error, worst_violations(v)))
+        if on_round is not None:
+            on_round(rounds[-1])
+        if result.status != "converged":
+            return VerifiedSolve(program, result, check, result.status, result.message, rounds)
+        if v.passed:
+            message = result.message if attempt == 0 else f"{result.message}; verified after {attempt} repair rounds"
+            return VerifiedSolve(program, result, check, "converged", message, rounds)
+        repair = checker.repair(program, result.x, check, attempt) if attempt < budget else None
+        if repair is None:
+            why = "repair budget spent" if attempt == budget else "no repair left to try"
+            return VerifiedSolve(program, result, check, "unverified",
+                                 f"the dense check fails after {attempt} repair rounds ({why}): {worst_violations(v)}",
+                                 rounds)
+        program, what = repair.program, repair.description
+        result = merge_results(result, SCPAlgorithm(program, settings, log).run(repair.x0))
+    raise AssertionError("unreachable: the loop returns on its last round")
+
+
+def grown_margin(excess: float, attempt: int, floor: float) -> float:
+    """How much to tighten a bound whose dense check saw ``excess`` beyond it, in round ``attempt``.
+
+    The margin starts at the excess plus ``floor`` and grows by half the excess each round
+    that did not clear it, so a repair that undershoots converges instead of repeating.
+    """
+    return excess * (1.0 + 0.5 * attempt) + floor * (1 + attempt)
