@@ -22,6 +22,15 @@ def _spec(problem: str | Path | ProblemSpec, overrides: Sequence[str]) -> Proble
     return load_problem(problem, overrides)
 
 
+def _check_resolved(spec: ProblemSpec) -> None:
+    """Refuse a problem that still takes an input from another case's result (only validate resolves it)."""
+    for key, link_key, link in spec.input_links():
+        raise SpecError(f"{spec.source}: {link_key}: takes {link.figure} from the result of problem {link.problem!r}, "
+                        f"which only `convexguid validate` resolves; run this file through convexguid validate "
+                        f"together with that problem's file, or set {key} instead (e.g. --set {link_key}=null "
+                        f"--set {key}=<value>)")
+
+
 def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] = (),
           log: Callable[[IterationRecord], None] | None = None) -> Solution:
     """Plan and verify ``problem`` (a YAML path or a loaded spec).
@@ -29,8 +38,15 @@ def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] = (),
     ``overrides`` are ``dotted.key=value`` strings as for ``convexguid solve --set``;
     ``log`` receives one :class:`~convexguid.scp.engine.IterationRecord` per SCP iteration.
     A simulated family (``potential_function``) is simulated as by :func:`simulate` (``log`` is unused).
+
+    Raises
+    ------
+    SpecError
+        For invalid input, or an input taken from another case's result (e.g. ``boundary.tf_from``),
+        which only :func:`convexguid.report.validation.validate` resolves.
     """
     spec = _spec(problem, overrides)
+    _check_resolved(spec)
     return get_family(spec.family).solve(spec, log)
 
 
@@ -46,6 +62,7 @@ def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] = ()) -
         For invalid input or a family that is planned, not simulated (use :func:`solve`).
     """
     spec = _spec(problem, overrides)
+    _check_resolved(spec)
     family = get_family(spec.family)
     if not family.simulated:
         simulated = ", ".join(name for name, f in FAMILIES.items() if f.simulated)

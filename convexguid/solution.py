@@ -5,13 +5,15 @@ from __future__ import annotations
 import csv
 import json
 import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from convexguid.scp.engine import IterationRecord
 from convexguid.scp.problem import ProgramSize
+from convexguid.scp.state import IterationRecord
+from convexguid.scp.verified import RepairRound, VerifiedSolve
 from convexguid.verify import Verification
 
 
@@ -51,6 +53,7 @@ class Solution:
     dense: Trajectory | None = None
     extras: dict[str, float | int | str | None] = field(default_factory=dict)
     timing: dict[str, float] = field(default_factory=dict)
+    repair_rounds: list[RepairRound] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -73,6 +76,7 @@ class Solution:
             "solver": self.solver,
             "timing": self.timing,
             "verification": self.verification.to_dict() if self.verification else None,
+            "repair_rounds": [r.to_dict() for r in self.repair_rounds],
         }
         out.update({k: _finite(v) if isinstance(v, float) else v for k, v in self.extras.items()})
         return out
@@ -80,6 +84,23 @@ class Solution:
     def write_summary(self, path: Path) -> None:
         """Write the summary JSON atomically (a reader never sees half a file)."""
         write_text_atomic(Path(path), json.dumps(self.summary(), indent=2) + "\n")
+
+
+def planned_solution(spec, outcome: VerifiedSolve, started: float, size: ProgramSize, *,
+                     nodes: Trajectory | None = None, dense: Trajectory | None = None,
+                     extras: dict | None = None) -> Solution:
+    """The :class:`Solution` of a plan that went through the engine's check-repair loop.
+
+    Status, message, objective, iterations, history, timing, the dense verification and the
+    repair rounds come from ``outcome``; the family adds its trajectories and figures.
+    """
+    result = outcome.result
+    return Solution(problem=spec.name, family=spec.family, method=spec.method, status=outcome.status,
+                    objective=result.objective, iterations=result.iterations, size=size,
+                    wall_time_s=time.perf_counter() - started, solver=spec.solver.backend, message=outcome.message,
+                    verification=outcome.check.verification if outcome.check is not None else None,
+                    history=result.history, nodes=nodes, dense=dense, extras=dict(extras or {}),
+                    timing=result.timing(), repair_rounds=list(outcome.rounds))
 
 
 def _finite(value: float | None) -> float | None:

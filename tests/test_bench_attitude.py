@@ -1,9 +1,10 @@
 """The attitude benchmark (SCP vs IPOPT against the grid size) runs end to end on a small grid.
 
 One ``K = 10`` run with ``repeat = 1`` (a few seconds): every method has a row with positive
-times, the markdown carries the table, and ``convexguid bench`` passes ``quaternion_attitude``
-files to :func:`convexguid.families.quaternion_attitude.bench.run_attitude_bench`. The IPOPT rows
-are checked only when ``casadi`` is installed.
+times, the runs that are compared (gaps, the energy rows' final time, the timing note) must have
+converged first, the markdown carries the table, and ``convexguid bench`` passes
+``quaternion_attitude`` files to :func:`convexguid.families.quaternion_attitude.bench.run_attitude_bench`.
+The IPOPT rows are checked only when ``casadi`` is installed (skipped, not passed, without it).
 """
 
 from __future__ import annotations
@@ -32,10 +33,23 @@ def _row(rows, method):
     return found[0]
 
 
+def _ok_row(rows, method):
+    """The row of ``method``, which must have succeeded (converged, or IPOPT reported success)."""
+    row = _row(rows, method)
+    assert row.ok, f"K = {K} {method} did not succeed: {row.status}: {row.message}"
+    return row
+
+
+SCP_ENERGY_K10_FAILS = pytest.mark.xfail(strict=True, reason=(
+    "SCP minimum energy at K = 10 ends max_iterations ('iterates stalled with constraints violated after a "
+    "phase-1 restart: dynamics_defects by 7.51e-06 scaled') on a feasible NLP: IPOPT solves the same "
+    "Hermite-Simpson NLP at the same tf (Solve_Succeeded, energy 0.0899 N^2 m^2 s)"))
+
+
 def test_path_transfer_row_once(rows):
-    row = _row(rows, "path_transfer")
+    row = _ok_row(rows, "path_transfer")
     assert row.intervals is None
-    assert row.ok and row.tf_s > 0 and row.wall_s > 0
+    assert row.tf_s > 0 and row.wall_s > 0
 
 
 @pytest.mark.parametrize("objective", ["time", "energy"])
@@ -47,25 +61,26 @@ def test_scp_rows_have_positive_times(rows, objective):
     assert row.iterations > 0
 
 
-def test_energy_final_time_is_the_factor_times_the_minimum_time(rows):
-    scp_time, scp_energy = _row(rows, "scp time"), _row(rows, "scp energy")
-    if not scp_time.ok:
-        pytest.skip(f"minimum-time SCP did not converge: {scp_time.message}")
-    assert scp_energy.tf_s == pytest.approx(attitude_bench.ENERGY_TF_FACTOR * scp_time.tf_s)
+@pytest.mark.parametrize("solver", [pytest.param("scp", marks=SCP_ENERGY_K10_FAILS), "ipopt"])
+def test_energy_final_time_is_the_factor_times_the_minimum_time(rows, solver):
+    if solver == "ipopt":
+        pytest.importorskip("casadi")
+    scp_time = _ok_row(rows, "scp time")
+    energy = _ok_row(rows, f"{solver} energy")
+    assert energy.tf_s == pytest.approx(attitude_bench.ENERGY_TF_FACTOR * scp_time.tf_s)
 
 
-@pytest.mark.parametrize("objective", ["time", "energy"])
+@pytest.mark.parametrize("objective", ["time", pytest.param("energy", marks=SCP_ENERGY_K10_FAILS)])
 def test_ipopt_rows_have_positive_times_and_gaps(rows, objective):
-    if not casadi_available():
-        pytest.skip("casadi is not installed")
-    ipopt = _row(rows, f"ipopt {objective}")
+    pytest.importorskip("casadi")
+    ipopt = _ok_row(rows, f"ipopt {objective}")
     assert ipopt.wall_s > 0 and ipopt.setup_s > 0 and ipopt.iterations > 0
     assert ipopt.gap is None  # the reference of the gaps
-    scp = _row(rows, f"scp {objective}")
-    if scp.ok and ipopt.ok:
-        assert scp.gap == pytest.approx((scp.value - ipopt.value) / ipopt.value)
-        polish = _row(rows, f"ipopt @scp {objective}")
-        assert polish.wall_s > 0 and polish.setup_s > 0
+    scp = _ok_row(rows, f"scp {objective}")
+    polish = _ok_row(rows, f"ipopt @scp {objective}")
+    assert polish.wall_s > 0 and polish.setup_s > 0
+    for row in (scp, polish):
+        assert row.gap == pytest.approx((row.value - ipopt.value) / ipopt.value), row.method
 
 
 def test_no_ipopt_rows_without_ipopt():
@@ -82,7 +97,8 @@ def test_markdown_has_the_table_and_notes(rows):
     assert "--nodes 10 --repeat 1" in text
     for method in ("path_transfer", "scp time", "scp energy"):
         assert f"| {method} |" in text
-    assert "SCP minimum time at K = 10 (11 nodes) under 1 s" in text or not _row(rows, "scp time").ok
+    _ok_row(rows, "scp time")  # the timing note is written for a converged minimum-time SCP only
+    assert "SCP minimum time at K = 10 (11 nodes) under 1 s" in text
 
 
 def test_bench_command_dispatches_attitude_files(monkeypatch, tmp_path):

@@ -51,7 +51,7 @@ def test_min_time_matches_ipopt_on_the_same_nlp():
     from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt
 
     program, spec = _program(MULTICONE, 20)
-    result = solve_scp(program, scp_settings(spec.solver, program))
+    result = solve_scp(program, scp_settings(spec.solver))
     assert result.status == "converged"
     ref = solve_quaternion_attitude_ipopt(program.case, 20, program.nodes(program.initial_guess()),
                                           program.objective_scale)
@@ -133,16 +133,39 @@ def test_initial_attitude_inside_the_forbidden_zone_is_rejected(tmp_path):
 
 
 def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
-    """Issue 5's comparison: same slew and limits, tf = the potential-function controller's 0.1 deg time."""
-    from convexguid.report.comparisons import guo_table
+    """Issue 5's comparison: same slew and limits, tf = the potential-function controller's 0.1 deg time.
 
-    controller = solve(PROBLEMS / "guo2011_adaptive.yaml")
+    The energy case takes its final time from the controller's result (``boundary.tf_from``); the comparison
+    table renders the three results it is given, in that order, and solves nothing itself.
+    """
+    from convexguid.report.comparisons import comparison_sections
+    from convexguid.report.validation import CaseResult, link_overrides
+
+    coarse = ["discretization.intervals=16"]
+    controller_spec = load_problem(PROBLEMS / "guo2011_adaptive.yaml")
+    controller = solve(controller_spec)
     tf = controller.extras["maneuver_time_01deg_s"]
-    energy_plan = solve(GUO, ["discretization.intervals=16", "objective=energy", f"boundary.tf_s={tf!r}"])
-    time_plan = solve(GUO, ["discretization.intervals=16"])
+    energy_file = PROBLEMS / "guo2011_scp_energy.yaml"
+    linked = link_overrides(load_problem(energy_file), {controller_spec.name: controller})
+    assert linked == ["boundary.tf_from=null", f"boundary.tf_s={float(tf)!r}"]
+    energy_spec = load_problem(energy_file, coarse + linked)
+    time_spec = load_problem(GUO, coarse)
+    energy_plan, time_plan = solve(energy_spec), solve(time_spec)
     assert energy_plan.ok and time_plan.ok
     assert energy_plan.extras["maneuver_time_s"] == pytest.approx(tf)
     assert energy_plan.extras["energy"] < controller.extras["energy_N2m2s"]
     assert time_plan.extras["maneuver_time_s"] < tf
-    table = "\n".join(guo_table(controller, time_plan, energy_plan))
-    assert "% less energy" in table and "| SCP, minimum time |" in table
+    results = [CaseResult(spec, sol, (), ()) for spec, sol in
+               ((controller_spec, controller), (time_spec, time_plan), (energy_spec, energy_plan))]
+    lines = comparison_sections(results)
+    rows = [line for line in lines if line.startswith("| ") and not line.startswith("| method")]
+    assert [row.split(" | ")[0] for row in rows] == [
+        "| potential-function controller (Fig. 3 case, closed loop, disturbed)", "| SCP, minimum time",
+        "| SCP, minimum energy at the controller's maneuver time"]
+    assert rows[0].split(" | ")[1] == f"{tf:.2f}" == rows[2].split(" | ")[1]
+    assert rows[0].split(" | ")[2] == f"{controller.extras['energy_N2m2s']:.4g}"
+    assert rows[1].split(" | ")[1] == f"{time_plan.extras['maneuver_time_s']:.2f}"
+    saving = 100 * (1 - energy_plan.extras["energy"] / controller.extras["energy_N2m2s"])
+    table = "\n".join(lines)
+    assert f"uses {saving:.1f}% less energy" in table
+    assert f"finishes in {time_plan.extras['maneuver_time_s']:.1f} s" in table

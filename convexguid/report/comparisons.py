@@ -1,98 +1,233 @@
 """Cross-method tables of the validation report: cases of one scenario solved by different methods, side by side.
 
-* Multi-cone slew (Wang, Xu, Li, seed 003; the paper's Table 2 was lost in extraction): the
-  path-transfer planner against the SCP's minimum-time and minimum-energy plans, with maneuver
-  time, compute time and the smallest clearance to any cone edge on the dense verification grid.
-* Forbidden attitude (Guo, Li, Ma 2011, seed 001): the potential-function controller's closed-loop
-  run against SCP plans of the same slew under the same limits: minimum time, and minimum energy
-  at the controller's maneuver time (solved here, since that time is an output of the simulation).
+A case joins a table through its problem file, ``reference.comparison: {table: <id>, label: <row label>}``
+(optionally ``role`` and ``figures``, see :class:`~convexguid.spec.common.ComparisonEntry`). This module only
+renders the results the validation run hands it: one row per case, in the order of the results; the sentences
+under a table are computed from the rows present, found by their ``role`` (a sentence whose roles are missing
+is left out). A column shows a summary figure (or a figure computed from the solution); a row's
+``figures`` names the summary key standing for a column where the default does not apply (e.g. a simulated
+controller's maneuver time). Tables:
+
+* ``multicone`` (Wang, Xu, Li, Table 2 layout): maneuver time, planning time, smallest cone margin on the dense
+  grid, energy, verified; roles ``baseline`` (the paper's planner) and ``min_time``.
+* ``forbidden_attitude`` (Guo, Li, Ma 2011): maneuver time, energy, smallest angle to the forbidden attitude,
+  compute time, verified; roles ``baseline`` (the controller), ``min_time`` and ``min_energy``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from pathlib import Path
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
-from convexguid.api import solve
+from convexguid.errors import SpecError
+from convexguid.families import get_family
 from convexguid.solution import Solution
-
-MULTICONE_CASES = {"wang-multicone-path-transfer": "path transfer (paper's planner)",
-                   "wang-multicone-time": "SCP, minimum time",
-                   "wang-multicone-energy": "SCP, minimum energy (t_f = 1.3 x minimum time)"}
-GUO_CONTROLLER, GUO_SCP_TIME = "guo2011-adaptive", "guo2011-scp-time"
+from convexguid.spec import ProblemSpec
 
 
-def comparison_sections(results: Sequence, problems_dir: Path) -> list[str]:
-    """Markdown lines of every comparison whose cases are among ``results`` (validation ``CaseResult``s)."""
-    by_name = {r.spec.name: r.solution for r in results}
+@dataclass(frozen=True)
+class Column:
+    """One column: ``default`` gives the value from a solution unless the row's ``figures`` names a summary key."""
+
+    id: str
+    header: str
+    fmt: str
+    default: Callable[[Solution], float | None]
+
+
+@dataclass(frozen=True)
+class Row:
+    """One case of a table, its column values by column id."""
+
+    label: str
+    role: str | None
+    solution: Solution
+    values: dict[str, float | None]
+
+
+@dataclass(frozen=True)
+class Table:
+    """A cross-method table: heading, text above it, columns (then ``verified``), sentences below it."""
+
+    id: str
+    title: str
+    intro: tuple[str, ...]
+    columns: tuple[Column, ...]
+    notes: Callable[[dict[str, Row], list[Row]], list[str]]
+
+
+def _figure(key: str) -> Callable[[Solution], float | None]:
+    return lambda sol: _number(sol.summary().get(key))
+
+
+def _number(value: object) -> float | None:
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def _smallest_forbidden_angle(sol: Solution) -> float | None:
+    """Smallest angle to a forbidden attitude on the dense check (its ``forbidden*`` constraints)."""
+    checks = [c.worst for c in (sol.verification.checks if sol.verification else ()) if c.name.startswith("forbidden")]
+    return min(checks) if checks else None
+
+
+def _maneuver_time(fmt: str) -> Column:
+    return Column("maneuver_time", "maneuver time [s]", fmt, _figure("maneuver_time_s"))
+
+
+def _energy(fmt: str) -> Column:
+    return Column("energy", "energy [N^2 m^2 s]", fmt, _figure("energy"))
+
+
+def _compute_time(header: str, fmt: str) -> Column:
+    return Column("compute_time", header, fmt, _figure("wall_time_s"))
+
+
+def _multicone_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
+    text = []
+    base, fast = roles.get("baseline"), roles.get("min_time")
+    if base and fast and None not in (base.values["maneuver_time"], fast.values["maneuver_time"],
+                                      base.values["compute_time"], fast.values["compute_time"]):
+        cut = 1 - fast.values["maneuver_time"] / base.values["maneuver_time"]
+        ratio = fast.values["compute_time"] / base.values["compute_time"]
+        text.append(f"The SCP's minimum-time plan is {100 * cut:.1f}% shorter than the path-transfer plan and takes "
+                    f"{ratio:.2f}x its planning time (the paper reports path transfer cutting the maneuver time by "
+                    "about 85% and the planning time by about 33% against RDRP, which is not reimplemented here).")
+    clearance = next((r.solution.extras for r in rows if r.solution.extras.get("eigenaxis_min_angle_deg")), None)
+    if clearance is not None:
+        angles = clearance["eigenaxis_min_angle_deg"]
+        text.append("The eigenaxis slew passes this close to each cone's direction: "
+                    + ", ".join(f"{k} {v:.3f} deg" for k, v in angles.items()) + _broken_cones(clearance) + ".")
+    text.append("Margins are measured on the dense SciPy re-propagation.")
+    return ["", " ".join(text),
+            "Compute times are single runs of `convexguid validate`; `convexguid bench` repeats them against IPOPT."]
+
+
+def _broken_cones(extras: dict) -> str:
+    """``; cones 1 and 2 (20 and 15 deg half-angles) are broken``: keep-out cones the eigenaxis slew enters."""
+    angles, cones = extras["eigenaxis_min_angle_deg"], extras.get("cones") or []
+    broken = [(i, c["half_angle_deg"]) for i, c in enumerate(cones, 1)
+              if c.get("keep_out", True) and c["name"] in angles and angles[c["name"]] < c["half_angle_deg"]]
+    if not cones:
+        return ""
+    if not broken:
+        return "; it breaks no cone"
+
+    def _and(items: list[str]) -> str:
+        return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+    if len(broken) == 1:
+        return f"; cone {broken[0][0]} ({broken[0][1]:g} deg half-angle) is broken"
+    return (f"; cones {_and([str(i) for i, _ in broken])} ({_and([f'{h:g}' for _, h in broken])} deg half-angles) "
+            "are broken")
+
+
+def _forbidden_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
+    text = []
+    base, plan, fast = roles.get("baseline"), roles.get("min_energy"), roles.get("min_time")
+    if base and plan and base.values["energy"] and plan.values["energy"] is not None:
+        e_base, e_plan = base.values["energy"], plan.values["energy"]
+        text.append(f"At the controller's maneuver time the SCP plan uses {100 * (1 - e_plan / e_base):.1f}% less "
+                    f"energy ({e_plan:.4g} against {e_base:.4g} N^2 m^2 s)"
+                    + (";" if fast and fast.values["maneuver_time"] is not None else "."))
+    if fast and fast.values["maneuver_time"] is not None:
+        finish = f"the minimum-time plan finishes in {fast.values['maneuver_time']:.1f} s."
+        text.append(finish if text else finish[0].upper() + finish[1:])
+    text.append("The controller flies a disturbed closed loop and needs no plan; the SCP plans open loop without the "
+                "disturbance torque and would need a tracking loop.")
+    return ["", " ".join(text)]
+
+
+TABLES: dict[str, Table] = {table.id: table for table in (
+    Table("multicone", "Multi-cone slew: path transfer against the SCP (Wang, Xu, Li, Table 2 layout)", (),
+          (_maneuver_time(".3f"), _compute_time("planning (compute) time [s]", ".3f"),
+           Column("cone_margin", "smallest cone margin [deg]", ".3f", _figure("min_cone_margin_deg")),
+           _energy(".4g")),
+          _multicone_notes),
+    Table("forbidden_attitude",
+          "Forbidden attitude: potential-function controller against the SCP planner (Guo, Li, Ma 2011)",
+          ("Same spacecraft, boundary attitudes and limits (|u_i| <= 0.5 N m, |w_i| <= 1.91 deg/s, theta_b > 10 deg); "
+           "the controller's maneuver time is to within 0.1 deg of the command.",),
+          (_maneuver_time(".2f"), _energy(".4g"),
+           Column("forbidden_angle", "smallest theta_b [deg]", ".2f", _smallest_forbidden_angle),
+           _compute_time("compute time [s]", ".3f")),
+          _forbidden_notes),
+)}
+"""The cross-method tables, by the id a problem file's ``reference.comparison.table`` gives."""
+
+
+def check_comparisons(specs: Sequence[ProblemSpec]) -> None:
+    """Check the ``reference.comparison`` blocks of the cases of one validation run before anything is solved.
+
+    Raises
+    ------
+    SpecError
+        For an unknown table or column id, a summary figure the row's family does not list among its key
+        figures (families that list none are not checked), or two rows of a table with the same role or label.
+    """
+    seen: dict[tuple[str, str, str], str] = {}
+    for spec in specs:
+        entry = spec.reference.comparison if spec.reference is not None else None
+        if entry is None:
+            continue
+        where = f"{spec.source}: reference.comparison"
+        table = TABLES.get(entry.table)
+        if table is None:
+            raise SpecError(f"{where}.table: unknown table (got {entry.table!r}); known tables: {', '.join(TABLES)}")
+        columns = [c.id for c in table.columns]
+        known = {key for key, _ in get_family(spec.family).key_figures}
+        for column, figure in (entry.figures or {}).items():
+            if column not in columns:
+                raise SpecError(f"{where}.figures.{column}: not a column of table {entry.table!r} "
+                                f"(got {column!r}); its columns: {', '.join(columns)}")
+            if known and figure not in known:
+                raise SpecError(f"{where}.figures.{column}: not a figure of family {spec.family!r} "
+                                f"(got {figure!r}); its figures: {', '.join(sorted(known))}")
+        for what, value in (("role", entry.role), ("label", entry.label)):
+            if value is None:
+                continue
+            other = seen.setdefault((entry.table, what, value), spec.name)
+            if other != spec.name:
+                raise SpecError(f"{where}.{what}: {other!r} already has this {what} in table {entry.table!r} "
+                                f"(got {value!r}); give each row of a table its own {what}")
+
+
+def comparison_sections(results: Sequence) -> list[str]:
+    """Markdown lines of every table with at least two rows among ``results`` (validation ``CaseResult``\\ s)."""
+    rows: dict[str, list[Row]] = {}
+    for r in results:
+        entry = r.spec.reference.comparison if r.spec.reference is not None else None
+        if entry is None or entry.table not in TABLES:
+            continue
+        figures = entry.figures or {}
+        values = {c.id: (_figure(figures[c.id]) if c.id in figures else c.default)(r.solution)
+                  for c in TABLES[entry.table].columns}
+        rows.setdefault(entry.table, []).append(Row(entry.label, entry.role, r.solution, values))
     lines: list[str] = []
-    if all(name in by_name for name in MULTICONE_CASES):
-        lines += multicone_table({name: by_name[name] for name in MULTICONE_CASES})
-    if GUO_CONTROLLER in by_name and GUO_SCP_TIME in by_name:
-        controller, time_plan = by_name[GUO_CONTROLLER], by_name[GUO_SCP_TIME]
-        lines += guo_table(controller, time_plan, guo_energy_plan(controller, problems_dir / "guo2011_scp_time.yaml"))
+    for table_id, table in TABLES.items():
+        if len(rows.get(table_id, ())) >= 2:
+            lines += render_table(table, rows[table_id])
     return lines
 
 
-def _compute_time(sol: Solution) -> float:
-    """Planning time: the planner's own clock for path transfer, else the whole solve (SCP and tightening)."""
-    return float(sol.extras.get("planning_time_s", sol.wall_time_s))
+def _cell(value: float | None, fmt: str) -> str:
+    return "n/a" if value is None else format(value, fmt)
 
 
-def multicone_table(solutions: dict[str, Solution]) -> list[str]:
-    """The Table-2-like comparison of the multi-cone scenario."""
-    lines = ["", "## Multi-cone slew: path transfer against the SCP (Wang, Xu, Li, Table 2 layout)", "",
-             "| method | maneuver time [s] | planning (compute) time [s] | smallest cone margin [deg] | "
-             "energy [N^2 m^2 s] | verified |", "|---|---|---|---|---|---|"]
-    for name, label in MULTICONE_CASES.items():
-        sol = solutions[name]
-        lines.append(f"| {label} | {sol.extras['maneuver_time_s']:.3f} | {_compute_time(sol):.3f} | "
-                     f"{sol.extras['min_cone_margin_deg']:.3f} | {sol.extras['energy']:.4g} | "
-                     f"{'yes' if sol.ok else 'NO'} |")
-    pt, scp = solutions["wang-multicone-path-transfer"], solutions["wang-multicone-time"]
-    cut = 1 - scp.extras["maneuver_time_s"] / pt.extras["maneuver_time_s"]
-    ratio = _compute_time(scp) / _compute_time(pt)
-    clearance = ", ".join(f"{k} {v:.3f} deg" for k, v in scp.extras["eigenaxis_min_angle_deg"].items())
-    lines += ["", f"The SCP's minimum-time plan is {100 * cut:.1f}% shorter than the path-transfer plan and takes "
-              f"{ratio:.2f}x its planning time (the paper reports path transfer cutting the maneuver time by about "
-              "85% and the planning time by about 33% against RDRP, which is not reimplemented here). "
-              f"The eigenaxis slew passes this close to each cone's direction: {clearance}; cones 1 and 2 "
-              "(20 and 15 deg half-angles) are broken. Margins are measured on the dense SciPy re-propagation.",
-              "Compute times are single runs of `convexguid validate`; `convexguid bench` repeats them against IPOPT."]
-    return lines
-
-
-def guo_energy_plan(controller: Solution, problem: Path) -> Solution:
-    """SCP minimum-energy plan of the Guo slew with the final time set to the controller's 0.1 deg maneuver time."""
-    tf = controller.extras["maneuver_time_01deg_s"]
-    return solve(problem, overrides=["objective=energy", f"boundary.tf_s={tf!r}", "name=guo2011-scp-energy"])
-
-
-def _forbidden_angle(sol: Solution) -> float:
-    checks = [c for c in sol.verification.checks if c.name.startswith("forbidden")]
-    return min(c.worst for c in checks)
-
-
-def guo_table(controller: Solution, time_plan: Solution, energy_plan: Solution) -> list[str]:
-    """Controller against the SCP plans of the same slew under the same limits."""
-    e_ctrl = controller.extras["energy_N2m2s"]
-    rows = [("potential-function controller (Fig. 3 case, closed loop, disturbed)",
-             controller.extras["maneuver_time_01deg_s"], e_ctrl, controller.extras["min_theta_b_deg"],
-             controller.wall_time_s, controller.ok),
-            ("SCP, minimum time", time_plan.extras["maneuver_time_s"], time_plan.extras["energy"],
-             _forbidden_angle(time_plan), time_plan.wall_time_s, time_plan.ok),
-            ("SCP, minimum energy at the controller's maneuver time", energy_plan.extras["maneuver_time_s"],
-             energy_plan.extras["energy"], _forbidden_angle(energy_plan), energy_plan.wall_time_s, energy_plan.ok)]
-    lines = ["", "## Forbidden attitude: potential-function controller against the SCP planner (Guo, Li, Ma 2011)", "",
-             "Same spacecraft, boundary attitudes and limits (|u_i| <= 0.5 N m, |w_i| <= 1.91 deg/s, "
-             "theta_b > 10 deg); the controller's maneuver time is to within 0.1 deg of the command.", "",
-             "| method | maneuver time [s] | energy [N^2 m^2 s] | smallest theta_b [deg] | compute time [s] | "
-             "verified |", "|---|---|---|---|---|---|"]
-    lines += [f"| {label} | {t:.2f} | {e:.4g} | {th:.2f} | {c:.3f} | {'yes' if ok else 'NO'} |"
-              for label, t, e, th, c, ok in rows]
-    saving = 1 - energy_plan.extras["energy"] / e_ctrl
-    lines += ["", f"At the controller's maneuver time the SCP plan uses {100 * saving:.1f}% less energy "
-              f"({energy_plan.extras['energy']:.4g} against {e_ctrl:.4g} N^2 m^2 s); the minimum-time plan finishes in "
-              f"{time_plan.extras['maneuver_time_s']:.1f} s. The controller flies a disturbed closed loop and needs "
-              "no plan; the SCP plans open loop without the disturbance torque and would need a tracking loop."]
-    return lines
+def render_table(table: Table, rows: list[Row]) -> list[str]:
+    """One table: heading, intro, one line per row (in the given order), the sentences of its roles."""
+    lines = ["", f"## {table.title}", ""]
+    for paragraph in table.intro:
+        lines += [paragraph, ""]
+    lines += ["| method | " + " | ".join(c.header for c in table.columns) + " | verified |",
+              "|---|" + "---|" * len(table.columns) + "---|"]
+    for row in rows:
+        cells = " | ".join(_cell(row.values[c.id], c.fmt) for c in table.columns)
+        lines.append(f"| {row.label} | {cells} | {'yes' if row.solution.ok else 'NO'} |")
+    roles = {}
+    for row in rows:
+        if row.role is not None:
+            roles.setdefault(row.role, row)
+    return lines + table.notes(roles, rows)

@@ -6,6 +6,12 @@ figures and the plots (:class:`~convexguid.families.base.Family` gives the figur
 the wording of the verification and the plots).
 Quantities under ``reference.values`` are compared with their relative tolerance;
 those under ``reference.max_values`` are upper limits (e.g. SCP iterations).
+
+A case may take an input from another case's result (``boundary.tf_from: {problem, figure}``, see
+:meth:`~convexguid.spec.common.ProblemBase.input_links`): the runner solves the cases in an order where
+each such case comes after the one it names, and loads it with the figure as an override. Cases whose
+``reference.comparison`` names the same table are set side by side by :mod:`convexguid.report.comparisons`,
+which renders the results and solves nothing.
 """
 
 from __future__ import annotations
@@ -16,8 +22,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from convexguid.api import solve
+from convexguid.errors import SpecError
 from convexguid.families import get_family
-from convexguid.report.comparisons import comparison_sections
+from convexguid.report.comparisons import check_comparisons, comparison_sections
 from convexguid.report.plots import plot_solution
 from convexguid.solution import Solution, write_text_atomic
 from convexguid.spec import ProblemSpec, load_problem
@@ -69,11 +76,76 @@ def compare(spec: ProblemSpec, solution: Solution) -> tuple[Comparison, ...]:
     return tuple(rows)
 
 
-def run_case(path: Path, figure_root: Path) -> CaseResult:
-    spec = load_problem(path)
+def run_case(path: Path, figure_root: Path, overrides: Sequence[str] = ()) -> CaseResult:
+    spec = load_problem(path, overrides)
     solution = solve(spec)
     figures = tuple(plot_solution(solution, figure_root / spec.name))
     return CaseResult(spec, solution, compare(spec, solution), figures)
+
+
+def run_order(specs: Sequence[ProblemSpec]) -> list[int]:
+    """Indices of ``specs`` in the order to solve them: each case after the cases its input links name.
+
+    Otherwise the given order is kept.
+
+    Raises
+    ------
+    SpecError
+        If a link names a problem that is not among ``specs`` (or is the case itself, or is named by two
+        cases), a figure that the named problem's family does not list among its key figures (families
+        that list none are not checked), or the links form a cycle.
+    """
+    index: dict[str, int] = {}
+    for i, spec in enumerate(specs):
+        if index.setdefault(spec.name, i) != i:
+            raise SpecError(f"{spec.source}: name: {specs[index[spec.name]].source} has the same name "
+                            f"(got {spec.name!r}); give every validated problem its own name")
+    needs: list[set[int]] = []
+    for spec in specs:
+        deps = set()
+        for _, link_key, link in spec.input_links():
+            where = f"{spec.source}: {link_key}.problem"
+            if link.problem not in index or link.problem == spec.name:
+                raise SpecError(f"{where}: not another case of this validation run (got {link.problem!r}); "
+                                f"name one of: {', '.join(n for n in index if n != spec.name)}")
+            known = {key for key, _ in get_family(specs[index[link.problem]].family).key_figures}
+            if known and link.figure not in known:
+                raise SpecError(f"{spec.source}: {link_key}.figure: not a figure of {link.problem!r} "
+                                f"(got {link.figure!r}); its figures: {', '.join(sorted(known))}")
+            deps.add(index[link.problem])
+        needs.append(deps)
+    order: list[int] = []
+    while len(order) < len(specs):
+        ready = next((i for i in range(len(specs)) if i not in order and needs[i] <= set(order)), None)
+        if ready is None:
+            stuck = [i for i in range(len(specs)) if i not in order]
+            raise SpecError(f"{specs[stuck[0]].source}: input links form a cycle among "
+                            f"{', '.join(specs[i].name for i in stuck)}; "
+                            "a case can only take inputs from cases that do not depend on it")
+        order.append(ready)
+    return order
+
+
+def link_overrides(spec: ProblemSpec, solved: dict[str, Solution]) -> list[str]:
+    """Overrides that resolve ``spec``'s input links from the solutions of the cases they name, by name.
+
+    Each link ``<link_key>: {problem, figure}`` giving ``<key>`` becomes ``<link_key>=null`` and
+    ``<key>=<the figure of that problem's summary>``.
+
+    Raises
+    ------
+    SpecError
+        If the named result lacks the figure or it is not a finite number (e.g. the maneuver was never
+        completed).
+    """
+    overrides = []
+    for key, link_key, link in spec.input_links():
+        value = solved[link.problem].summary().get(link.figure)
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+            raise SpecError(f"{spec.source}: {link_key}: the result of {link.problem!r} has no finite "
+                            f"{link.figure} (got {value!r}); fix that case, or set {key} in this file")
+        overrides += [f"{link_key}=null", f"{key}={float(value)!r}"]
+    return overrides
 
 
 def reference_problems(directory: Path = DEFAULT_PROBLEMS_DIR) -> list[Path]:
@@ -82,13 +154,24 @@ def reference_problems(directory: Path = DEFAULT_PROBLEMS_DIR) -> list[Path]:
 
 
 def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_REPORT) -> list[CaseResult]:
-    """Run the reference cases (default: every file in ``problems/`` with a reference) and write the report."""
+    """Run the reference cases (default: every file in ``problems/`` with a reference) and write the report.
+
+    Cases are solved in :func:`run_order` (linked inputs resolved by :func:`link_overrides`); the results,
+    the report's rows and its comparison tables keep the order of ``problems``.
+    """
     report = Path(report)
     paths = [Path(p) for p in problems] or reference_problems()
-    results = [run_case(p, report.parent / "figures") for p in paths]
-    extra = comparison_sections(results, DEFAULT_PROBLEMS_DIR)
-    write_text_atomic(report, render(results, report.parent, extra))
-    return results
+    specs = [load_problem(p) for p in paths]
+    order = run_order(specs)
+    check_comparisons(specs)
+    results: dict[int, CaseResult] = {}
+    solved: dict[str, Solution] = {}
+    for i in order:
+        results[i] = run_case(paths[i], report.parent / "figures", link_overrides(specs[i], solved))
+        solved[specs[i].name] = results[i].solution
+    ordered = [results[i] for i in range(len(paths))]
+    write_text_atomic(report, render(ordered, report.parent, comparison_sections(ordered)))
+    return ordered
 
 
 def _fmt(value: float | None) -> str:

@@ -27,6 +27,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from convexguid.errors import SolverError
 from convexguid.scp.engine import Log, SCPAlgorithm
 from convexguid.scp.problem import NonconvexProgram, SCPSettings
 from convexguid.scp.state import SCPResult, merge_results
@@ -63,7 +64,7 @@ class PlanChecker(Protocol):
 
 @dataclass(frozen=True)
 class RepairRound:
-    """One solve of the loop: what was repaired before it and the figures after it."""
+    """One solve of the loop: what was repaired before it, its own SCP iterations and the figures after it."""
 
     round: int
     repair: str
@@ -99,7 +100,8 @@ class VerifiedSolve:
 
 def worst_violations(verification: Verification, count: int = 3) -> str:
     """The largest violations of a dense check (``"name worst > bound"``), then the final-state errors."""
-    broken = sorted((c for c in verification.checks if c.violation > 0), key=lambda c: -c.violation)[:count]
+    broken = sorted((c for c in verification.checks if c.violation > 1e-9 * max(1.0, abs(c.bound))),
+                    key=lambda c: -c.violation)[:count]
     parts = [f"{c.name} {c.worst:.6g} {'>' if c.sense == 'max' else '<'} {c.bound:g}" for c in broken]
     parts += [f"{k} {v:.3g}" for k, v in verification.final_errors.items()]
     return "; ".join(parts)
@@ -109,22 +111,28 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
                    budget: int = DEFAULT_REPAIR_BUDGET, x0: np.ndarray | None = None,
                    on_round: Callable[[RepairRound], None] | None = None) -> VerifiedSolve:
     """Solve, check densely, repair and re-solve warm until verified or ``budget`` repairs are spent."""
-    result = SCPAlgorithm(program, settings, log).run(x0)
+    result = last = SCPAlgorithm(program, settings, log).run(x0)
     rounds: list[RepairRound] = []
     what = "first solve"
     for attempt in range(budget + 1):
-        if result.status not in ("converged", "max_iterations"):
+        try:
+            check = checker.check(program, result.x)
+        except SolverError:
+            if result.status == "converged":
+                raise
+            # the last iterate of a failed solve may not even propagate; its status says why
             return VerifiedSolve(program, result, None, result.status, result.message, rounds)
-        check = checker.check(program, result.x)
         v = check.verification
-        rounds.append(RepairRound(attempt, what, result.status, result.iterations, result.objective, v.passed,
+        rounds.append(RepairRound(attempt, what, result.status, last.iterations, result.objective, v.passed,
                                   v.max_violation, v.final_state_error, worst_violations(v)))
         if on_round is not None:
             on_round(rounds[-1])
         if result.status != "converged":
+            # infeasible, max_iterations, solver_error: the check of the last iterate is reported, not repaired
             return VerifiedSolve(program, result, check, result.status, result.message, rounds)
         if v.passed:
-            message = result.message if attempt == 0 else f"{result.message}; verified after {attempt} repair rounds"
+            rounds_text = f"{attempt} repair round{'s' if attempt > 1 else ''}"
+            message = result.message if attempt == 0 else f"{result.message}; verified after {rounds_text}"
             return VerifiedSolve(program, result, check, "converged", message, rounds)
         repair = checker.repair(program, result.x, check, attempt) if attempt < budget else None
         if repair is None:
@@ -133,7 +141,8 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
                                  f"the dense check fails after {attempt} repair rounds ({why}): {worst_violations(v)}",
                                  rounds)
         program, what = repair.program, repair.description
-        result = merge_results(result, SCPAlgorithm(program, settings, log).run(repair.x0))
+        last = SCPAlgorithm(program, settings, log).run(repair.x0)
+        result = merge_results(result, last)
     raise AssertionError("unreachable: the loop returns on its last round")
 
 

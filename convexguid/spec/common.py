@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, NamedTuple
 
 import numpy as np
 from pydantic import (
@@ -334,6 +334,60 @@ class VerificationSettings(SpecModel):
     constraint_tol: NonNegativeFloat = 1e-6
 
 
+class ComparisonEntry(SpecModel):
+    """The row a case contributes to one of the validation report's cross-method tables.
+
+    Cases whose ``reference.comparison`` names the same ``table`` are rendered side by side, one row each,
+    in the order the validation runs them (see :mod:`convexguid.report.comparisons`, which lists the tables,
+    their columns and their roles).
+
+    Attributes
+    ----------
+    table : str
+        Id of the table (e.g. ``multicone``, ``forbidden_attitude``); checked by the validation runner.
+    label : str
+        Row label (the ``method`` column).
+    role : {"baseline", "min_time", "min_energy"} or None
+        What the row stands for in the sentences under the table: ``baseline`` the method the others are
+        set against (e.g. the paper's own planner or controller), ``min_time`` / ``min_energy`` the
+        minimum-time / minimum-energy plan. At most one row of a table per role.
+    figures : dict of str to str or None
+        Summary figures filling the table's columns where the column's default figure does not apply,
+        by column id (e.g. ``{maneuver_time: maneuver_time_01deg_s}`` for a simulated controller).
+    """
+
+    table: NonEmptyStr
+    label: NonEmptyStr
+    role: Literal["baseline", "min_time", "min_energy"] | None = None
+    figures: dict[str, NonEmptyStr] | None = None
+
+
+class ResultLink(SpecModel):
+    """An input taken from another case's result: figure ``figure`` of the summary of problem ``problem``.
+
+    Only ``convexguid validate`` resolves it (it solves ``problem`` first and passes the figure in as an
+    override); a plain ``convexguid solve`` of a file with an unresolved link is an error.
+
+    Attributes
+    ----------
+    problem : str
+        ``name`` of the problem whose result gives the value.
+    figure : str
+        Key of that result's summary (e.g. ``maneuver_time_01deg_s``).
+    """
+
+    problem: NonEmptyStr
+    figure: NonEmptyStr
+
+
+class InputLink(NamedTuple):
+    """An unresolved :class:`ResultLink` of a problem: ``link`` (at ``link_key``) gives the value of ``key``."""
+
+    key: str
+    link_key: str
+    link: ResultLink
+
+
 class Reference(SpecModel):
     """Published values a problem reproduces, and the tolerances the validation applies.
 
@@ -353,6 +407,9 @@ class Reference(SpecModel):
         Quantities that must not exceed the given number (e.g. ``iterations``).
     notes : str or None
         Free text.
+    comparison : ComparisonEntry or None
+        The case's row in a cross-method table of the report (``{table: <id>, label: <row label>}``, optionally
+        ``role`` and ``figures``; see :class:`ComparisonEntry`).
     """
 
     citation: NonEmptyStr
@@ -362,6 +419,7 @@ class Reference(SpecModel):
     tolerances: dict[str, NonNegativeFloat] | None = None
     max_values: dict[str, float] | None = None
     notes: str | None = None
+    comparison: ComparisonEntry | None = None
 
     def tolerance_for(self, quantity: str) -> float:
         """Relative tolerance applied to ``quantity``."""
@@ -394,3 +452,11 @@ class ProblemBase(SpecModel):
     def source(self) -> str:
         """File the problem was read from, ``"<dict>"`` when built from Python."""
         return self._source
+
+    def input_links(self) -> tuple[InputLink, ...]:
+        """Inputs still to be taken from other cases' results (e.g. ``boundary.tf_from``); none by default.
+
+        ``convexguid validate`` resolves each by solving ``link.problem`` first and loading this problem
+        again with the overrides ``<link_key>=null`` and ``<key>=<figure value>``.
+        """
+        return ()

@@ -103,6 +103,10 @@ class FlatAttitudeProblem:
     grid: MappedChebyshev
     check_points_per_interval: int = 2
     extra_points: tuple[float, ...] = ()
+    cone_margin_rad: float = 0.0
+    """Extra clearance demanded of every cone at the path points (set by the dense check's repairs)."""
+    torque_margin: float = 0.0
+    """Amount the torque box is tightened at the path points (set by the dense check's repairs)."""
 
     @property
     def time_scale(self) -> float:
@@ -189,7 +193,7 @@ class FlatAttitudeProgram:
         interp = sp.kron(sp.csr_matrix(p.path_interpolation), sp.eye(3), format="csr")
         rows = interp.shape[0]
         M = sp.vstack([interp, -interp], format="csr")
-        return OutputConstraints(M, np.full(2 * rows, p.torque_max),
+        return OutputConstraints(M, np.full(2 * rows, p.torque_max - p.torque_margin),
                                  (OutputBlock("torque_Nm", slice(0, 2 * rows), "N m"),))
 
     def _torque_jacobian(self, z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
@@ -218,7 +222,7 @@ class FlatAttitudeProgram:
         blocks = []
         z_path = path @ z
         for cone in p.cones:
-            values = cone.cos_angle(z_path) - np.cos(cone.half_angle_rad)
+            values = cone.cos_angle(z_path) - np.cos(cone.half_angle_rad + p.cone_margin_rad)
             jac = None
             if jacobians:
                 local = pointwise_jacobian(cone.cos_angle, (z_path,), 0)

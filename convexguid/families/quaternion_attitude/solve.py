@@ -26,9 +26,10 @@ from convexguid.families.quaternion_attitude.program import (
 )
 from convexguid.planners.path_transfer import PathTransferCone, PathTransferProblem, plan_path_transfer
 from convexguid.rotations import quat_angle_between, quat_sign_continuous
-from convexguid.scp.engine import IterationRecord, SCPResult, merge_results, solve_scp
 from convexguid.scp.problem import ProgramSize, SCPSettings
-from convexguid.solution import Solution, Trajectory
+from convexguid.scp.state import IterationRecord
+from convexguid.scp.verified import Check, Repair, VerifiedSolve, grown_margin, solve_verified
+from convexguid.solution import Solution, Trajectory, planned_solution
 from convexguid.verify import (
     AttitudeTrack,
     ConstraintCheck,
@@ -88,41 +89,65 @@ def verify_plan(case: AttitudeCase, t_end: float, torque: Callable[[float], np.n
     return replace(base, checks=checks, passed=path_ok and finals_ok), track
 
 
-def _tightened(program: QuaternionProgram, x: np.ndarray, verification: Verification) -> QuaternionProgram | None:
-    """A program with node constraints tightened by what the dense check saw between nodes, or None if none failed."""
-    by_name = {c.name: c for c in verification.checks}
-    geometric = [c.violation for c in verification.checks
-                 if c.name.startswith(("keep_out_", "keep_in_", "forbidden_")) and c.violation > 0]
-    rate = by_name.get("rate_degps")
-    if not geometric and (rate is None or rate.violation <= 0):
-        return None
-    margin = program.margin + (np.radians(max(geometric)) + np.radians(0.02) if geometric else 0.0)
-    tight_case = program.case
-    if rate is not None and rate.violation > 0:
-        tight_case = replace(tight_case, rate_max=tight_case.rate_max - np.radians(rate.violation) * 1.5)
-    nodes = program.nodes(x).copy()
-    # start inside the tightened rate box: its rows are hard, the trust region could not reach them
-    nodes[:, 4:7] = np.clip(nodes[:, 4:7], -tight_case.rate_max, tight_case.rate_max)
-    return QuaternionProgram(tight_case, program.K, nodes, program.final_time(x), margin)
+class QuaternionChecker:
+    """The family's side of the engine's check-repair loop (:mod:`convexguid.scp.verified`).
 
+    ``check`` integrates the planned torque (linear between nodes) and checks every cone, the
+    forbidden attitudes, the rate and torque boxes and the final state on a dense grid. ``repair``
+    tightens the node constraints by what the check saw between nodes: the cone and forbidden-attitude
+    margin, and the rate bound, each by a margin that grows every round that does not clear it
+    (:func:`~convexguid.scp.verified.grown_margin`). The tightened program starts from the last plan;
+    the engine moves that start into the tightened (hard) rate box.
+    """
+
+    def __init__(self, case: AttitudeCase, settings) -> None:
+        self.case, self.settings = case, settings
+
+    def check(self, program: QuaternionProgram, x: np.ndarray) -> Check:
+        tf = program.final_time(x)
+        verification, track = verify_plan(self.case, self.case.t0 + tf, program.torque_command(x), self.settings,
+                                          max_step=tf / program.K / 4)
+        return Check(verification, track)
+
+    def repair(self, program: QuaternionProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None:
+        by_name = {c.name: c for c in check.verification.checks}
+        geometric = [c.violation for c in check.verification.checks
+                     if c.name.startswith(("keep_out_", "keep_in_", "forbidden_")) and c.violation > 0]
+        rate = by_name.get("rate_degps")
+        rate_excess = rate.violation if rate is not None else 0.0
+        if not geometric and rate_excess <= 0:
+            return None
+        margin, tight_case, done = program.margin, program.case, []
+        if geometric:
+            step = np.radians(grown_margin(max(geometric), attempt, CONE_MARGIN_FLOOR_DEG))
+            margin += step
+            done.append(f"cone and forbidden-attitude margins +{np.degrees(step):.3g} deg")
+        if rate_excess > 0:
+            step = np.radians(grown_margin(1.5 * rate_excess, attempt, 0.0))
+            tight_case = replace(tight_case, rate_max=tight_case.rate_max - step)
+            done.append(f"rate bound -{np.degrees(step):.3g} deg/s")
+        tighter = QuaternionProgram(tight_case, program.K, program.nodes(x), program.final_time(x), margin)
+        return Repair(tighter, tighter.initial_guess(), "; ".join(done))
+
+
+CONE_MARGIN_FLOOR_DEG = 0.02
+"""Least extra clearance a tightening round adds to the cones and forbidden attitudes, deg."""
 
 PENALTY_RANGE = 1e4
 """How far the SCP may raise its penalty weight above the starting one when iterates stall infeasible."""
 
 
-def scp_settings(solver, program: QuaternionProgram) -> SCPSettings:
-    """The spec's SCP settings, with the penalty weight counted in units of the objective at the guess.
+def scp_settings(solver) -> SCPSettings:
+    """The spec's SCP settings, with the penalty weight counted in units of the objective at the start.
 
-    A weight of 30 then means "30 times the guess's maneuver time (or energy) per unit of
+    A weight of 30 then means "30 times the start's maneuver time (or energy) per unit of
     scaled constraint violation" for every case, however its torque, inertia or time scale.
     """
-    penalty = solver.penalty * program.objective_scale
-    return SCPSettings.from_spec(solver, penalty=penalty, penalty_max=PENALTY_RANGE * penalty)
+    return SCPSettings.from_spec(solver, penalty_unit="objective", penalty_max=PENALTY_RANGE * solver.penalty)
 
 
-def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[QuaternionProgram, SCPResult,
-                                                                                Verification, AttitudeTrack]:
-    """SCP with dense verification and constraint tightening (see the module docstring)."""
+def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> VerifiedSolve:
+    """SCP inside the engine's check-repair loop (see :class:`QuaternionChecker`)."""
     K = spec.discretization.intervals
     if guess_kind == "path_transfer":
         plan = plan_path_transfer(path_transfer_problem(case))
@@ -136,19 +161,8 @@ def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> tuple[
     else:
         guess, tf_guess = eigenaxis_start(case, K)
     program = QuaternionProgram(case, K, guess, tf_guess)
-    result = solve_scp(program, scp_settings(spec.solver, program), log)
-    for _ in range(MAX_TIGHTENINGS + 1):
-        tf = program.final_time(result.x)
-        verification, track = verify_plan(case, case.t0 + tf, program.torque_command(result.x), spec.verification,
-                                          max_step=tf / K / 4)
-        if result.status != "converged" or verification.passed:
-            break
-        tighter = _tightened(program, result.x, verification)
-        if tighter is None:
-            break
-        program = tighter
-        result = merge_results(result, solve_scp(program, scp_settings(spec.solver, program), log))
-    return program, result, verification, track
+    return solve_verified(program, scp_settings(spec.solver), QuaternionChecker(case, spec.verification), log,
+                          budget=MAX_TIGHTENINGS)
 
 
 def _state_columns(q: np.ndarray, omega: np.ndarray, torque: np.ndarray) -> dict[str, np.ndarray]:
@@ -204,35 +218,28 @@ def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | Non
     if spec.method == "path_transfer":
         return _solve_path_transfer(case, spec, start, extras)
     if spec.objective == "energy" and case.tf is None:
-        time_program, time_result, *_ = solve_scp_attitude(case, spec, None, spec.initial_guess)
-        if time_result.status != "converged":
-            return _failed(spec, time_result, time_program, start,
-                           "minimum time (which sets the energy problem's final time) did not converge: ")
-        extras["min_time_s"] = time_program.final_time(time_result.x)
+        timed = solve_scp_attitude(case, spec, None, spec.initial_guess)
+        if timed.result.status != "converged":
+            timed.message = "minimum time (which sets the energy problem's final time) did not converge: " \
+                + timed.message
+            return planned_solution(spec, timed, start, timed.program.size(), extras=extras)
+        extras["min_time_s"] = timed.program.final_time(timed.x)
         case = replace(case, tf=spec.boundary.tf_min_time_factor * extras["min_time_s"])
-    program, result, verification, track = solve_scp_attitude(case, spec, log, spec.initial_guess)
-    x = result.x
+    outcome = solve_scp_attitude(case, spec, log, spec.initial_guess)
+    program, x = outcome.program, outcome.x
     tf = program.final_time(x)
     nodes = program.nodes(x)
     node_cols = _state_columns(nodes[:, :4], nodes[:, 4:7], nodes[:, 7:])
-    extras.update({"maneuver_time_s": tf, "energy": _energy(track), "min_cone_margin_deg": cone_margin_deg(case, track),
-                   "node_constraint_margin_deg": float(np.degrees(program.margin)),
+    extras.update({"maneuver_time_s": tf, "node_constraint_margin_deg": float(np.degrees(program.margin)),
                    "max_quaternion_norm_error": float(np.abs(np.linalg.norm(nodes[:, :4], axis=1) - 1).max()),
                    "interval_s": tf / program.K, "initial_guess": spec.initial_guess, "objective_kind": spec.objective})
-    return Solution(problem=spec.name, family=spec.family, method=spec.method, status=result.status,
-                    objective=result.objective, iterations=result.iterations, size=program.size(),
-                    wall_time_s=time.perf_counter() - start, solver=spec.solver.backend, message=result.message,
-                    verification=verification,
-                    history=result.history, nodes=Trajectory(program.times(x), node_cols),
-                    dense=Trajectory(track.t, _dense_columns(case, track)), extras=extras,
-                    timing=result.timing())
-
-
-def _failed(spec, result: SCPResult, program: QuaternionProgram, start: float, prefix: str) -> Solution:
-    return Solution(problem=spec.name, family=spec.family, method=spec.method, status=result.status,
-                    objective=result.objective, iterations=result.iterations, size=program.size(),
-                    wall_time_s=time.perf_counter() - start, solver=spec.solver.backend,
-                    message=prefix + result.message, history=result.history)
+    dense = None
+    if outcome.check is not None:
+        track = outcome.check.track
+        extras.update({"energy": _energy(track), "min_cone_margin_deg": cone_margin_deg(case, track)})
+        dense = Trajectory(track.t, _dense_columns(case, track))
+    return planned_solution(spec, outcome, start, program.size(), nodes=Trajectory(program.times(x), node_cols),
+                            dense=dense, extras=extras)
 
 
 def _solve_path_transfer(case: AttitudeCase, spec, start: float, extras: dict) -> Solution:

@@ -23,10 +23,12 @@ from convexguid.rotations import axis_angle_to_quat, quat_angle_between
 from convexguid.spec.common import (
     Direction3,
     InertiaMatrix,
+    InputLink,
     KeepOutList,
     PositiveFloat,
     ProblemBase,
     Reference,
+    ResultLink,
     SolverSettings,
     SpecModel,
     UnitQuaternion,
@@ -70,13 +72,29 @@ class QuaternionBoundary(SpecModel):
 
     ``tf_min_time_factor``: with ``objective: energy`` and no ``tf_s``, the final time is this
     factor times the minimum time, which is solved for first.
+
+    ``tf_from``: with ``objective: energy``, the final time is a figure of another case's result,
+    ``{problem: <name>, figure: <summary key>}`` (e.g. a controller's maneuver time). Only
+    ``convexguid validate`` resolves it (it runs that case first and sets ``tf_s``); give ``tf_s`` or
+    ``tf_from``, not both, and not with ``tf_min_time_factor``.
     """
 
     t0_s: float = 0.0
     tf_s: PositiveFloat | None = None
+    tf_from: ResultLink | None = None
     tf_min_time_factor: Annotated[float, Field(gt=1.0)] | None = None
     initial: Attitude
     final: Attitude
+
+    @model_validator(mode="after")
+    def _one_final_time(self) -> QuaternionBoundary:
+        if self.tf_from is not None:
+            for other in ("tf_s", "tf_min_time_factor"):
+                if getattr(self, other) is not None:
+                    raise spec_error(f"{{here}}tf_from and {{here}}{other} are both set",
+                                     f"give either tf_from (a figure of another case's result) or {other}",
+                                     key=("tf_from",), value=self.tf_from.model_dump())
+        return self
 
 
 class AttitudeSpacecraft(SpecModel):
@@ -145,12 +163,17 @@ class QuaternionAttitudeProblem(ProblemBase):
     @model_validator(mode="after")
     def _consistent(self) -> QuaternionAttitudeProblem:
         b = self.boundary
-        if self.objective == "energy" and b.tf_s is None and b.tf_min_time_factor is None:
-            raise spec_error("minimum energy needs a final time", "give boundary.tf_s or boundary.tf_min_time_factor",
+        if self.objective == "energy" and b.tf_s is None and b.tf_min_time_factor is None and b.tf_from is None:
+            raise spec_error("minimum energy needs a final time",
+                             "give boundary.tf_s, boundary.tf_from or boundary.tf_min_time_factor",
                              key=("boundary",), value=None)
-        if self.objective == "time" and (b.tf_s is not None or b.tf_min_time_factor is not None):
-            raise spec_error("minimum time has a free final time", "remove boundary.tf_s / tf_min_time_factor",
-                             key=("boundary", "tf_s"), value=b.tf_s)
+        if self.objective == "time":
+            for key in ("tf_s", "tf_from", "tf_min_time_factor"):
+                value = getattr(b, key)
+                if value is not None:
+                    raise spec_error("minimum time has a free final time", f"remove boundary.{key}",
+                                     key=("boundary", key),
+                                     value=value.model_dump() if isinstance(value, ResultLink) else value)
         for i, cone in enumerate(self.keep_out):
             for which in ("initial", "final"):
                 angle = float(keep_out_angles_deg(getattr(b, which).q[None], cone.body_axis_unit,
@@ -180,4 +203,9 @@ class QuaternionAttitudeProblem(ProblemBase):
                                      f"it must be more than {f.min_angle_deg:g} deg away",
                                      key=("forbidden", i, "min_angle_deg"), value=f.min_angle_deg)
         return self
+
+    def input_links(self) -> tuple[InputLink, ...]:
+        """``boundary.tf_from`` while unresolved: it gives ``boundary.tf_s``."""
+        link = self.boundary.tf_from
+        return () if link is None else (InputLink("boundary.tf_s", "boundary.tf_from", link),)
 

@@ -324,3 +324,22 @@ class ArcsProgram:
         """
         _, dirs, durations = self.layout.split(x)
         return ThrustPlan.from_nodes(self.node_times(durations), dirs, self.burn_arcs(x), normalize=True)
+
+    def refined(self, x: np.ndarray, subintervals: int) -> tuple[ArcsProgram, np.ndarray]:
+        """The same transcription with ``subintervals`` per burn, and ``x`` carried over as its start.
+
+        Arc durations are kept; states and directions are interpolated linearly in time inside
+        each burn (directions renormalised).
+        """
+        finer = ArcsProgram(self.case, self.layout.burns, subintervals)
+        lay, new = self.layout, finer.layout
+        states, dirs, durations = lay.split(x)
+        old_s = np.linspace(0.0, 1.0, lay.nodes_per_burn)
+        new_s = np.linspace(0.0, 1.0, new.nodes_per_burn)
+        new_states, new_dirs = [], []
+        for b in range(lay.burns):
+            nodes = lay.burn_nodes(b)
+            new_states.append(np.column_stack([np.interp(new_s, old_s, col) for col in states[nodes].T]))
+            d = np.column_stack([np.interp(new_s, old_s, col) for col in dirs[nodes].T])
+            new_dirs.append(d / np.linalg.norm(d, axis=1, keepdims=True))
+        return finer, new.join(np.vstack(new_states), np.vstack(new_dirs), durations)

@@ -1,10 +1,13 @@
-"""Time the three rendezvous solvers on one problem file: ``lcvx``, ``scp_arcs`` and IPOPT on the arcs NLP.
+"""Time the rendezvous solvers on one problem file: ``lcvx`` (and its cvxpy statement), ``scp_arcs``, IPOPT.
 
 In one run, each method solves the problem ``repeat`` times and the fastest run is reported:
 
 - ``lcvx``: the lossless-convexification SOCP on the problem's ``discretization.grid_steps``
   zero-order-hold grid (:func:`convexguid.families.rendezvous.lcvx.solve_lcvx`), one
   convex solve whose optimum is global for that grid;
+- ``lcvx (cvxpy statement)``: the same SOCP stated uncondensed in cvxpy
+  (:func:`convexguid.families.rendezvous.lcvx_reference.solve_lcvx_cvxpy`), solved by cvxpy's Clarabel
+  interface: an independent cross-check of the hand-condensed program; its ``setup s`` is cvxpy's compile time;
 - ``scp_arcs``: Wang & Tang's burn/coast NLP (:class:`~convexguid.families.rendezvous.arcs.ArcsProgram`)
   by the SCP engine (:func:`convexguid.scp.engine.solve_scp`) with the problem's solver settings,
   from :meth:`ArcsProgram.initial_guess`;
@@ -36,6 +39,7 @@ from convexguid.bench_common import best_of, cell, environment_lines, markdown_g
 from convexguid.families.rendezvous.arcs import ArcsProgram
 from convexguid.families.rendezvous.case import Rendezvous, RendezvousPlan, build_case
 from convexguid.families.rendezvous.lcvx import solve_lcvx
+from convexguid.families.rendezvous.lcvx_reference import solve_lcvx_cvxpy
 from convexguid.families.rendezvous.reference import solve_rendezvous_arcs_ipopt
 from convexguid.reference import casadi_available
 from convexguid.scp.engine import solve_scp
@@ -48,6 +52,9 @@ IPOPT_TOLERANCE = 1e-10
 
 LCVX_SOLVER_TARGET_S = 0.1
 """Target: ``lcvx`` convex-solver time well under this, s."""
+
+LCVX_CVXPY = "lcvx (cvxpy statement)"
+"""Row name of the cvxpy statement of the ``lcvx`` SOCP."""
 
 SCP_WALL_TARGET_S = 0.5
 """Target: ``scp_arcs`` wall time under this, s."""
@@ -107,6 +114,17 @@ def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> Rendez
                               plan.timing.get("solver_s"), ok=ok, message=plan.message)
 
 
+def _lcvx_cvxpy_row(case: Rendezvous, steps: int, repeat: int) -> RendezvousBenchRow:
+    """The ``lcvx`` SOCP stated in cvxpy; wall = the whole call, setup = cvxpy's compile time."""
+    try:
+        r, _ = best_of(repeat, lambda: solve_lcvx_cvxpy(case, steps), lambda r: r.wall_time_s)
+    except Exception as exc:  # noqa: BLE001 - report and go on
+        return _failed(LCVX_CVXPY, exc)
+    return RendezvousBenchRow(LCVX_CVXPY, r.status, r.burn_time_s if r.optimal else None, r.iterations,
+                              r.wall_time_s, r.solve_time_s, setup_s=r.compile_time_s, ok=r.optimal,
+                              message="" if r.optimal else f"cvxpy returned {r.status}")
+
+
 def _scp_row(program: ArcsProgram, settings: SCPSettings, repeat: int) -> RendezvousBenchRow:
     """``scp_arcs`` from the program's initial guess."""
     try:
@@ -133,7 +151,7 @@ def _ipopt_row(program: ArcsProgram, repeat: int) -> RendezvousBenchRow:
 
 def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
                           with_ipopt: bool | None = None) -> list[RendezvousBenchRow]:
-    """Benchmark rows ``lcvx``, ``scp_arcs`` and (if ``with_ipopt``) ``ipopt`` for one problem file.
+    """Benchmark rows ``lcvx``, its cvxpy statement, ``scp_arcs`` and (if ``with_ipopt``) ``ipopt``.
 
     Parameters
     ----------
@@ -147,7 +165,7 @@ def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
     Returns
     -------
     list of RendezvousBenchRow
-        In the order ``lcvx``, ``scp_arcs``, ``ipopt``.
+        In the order ``lcvx``, ``lcvx (cvxpy statement)``, ``scp_arcs``, ``ipopt``.
 
     Raises
     ------
@@ -161,7 +179,8 @@ def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
     disc, s = spec.discretization, spec.solver
     program = ArcsProgram(case, disc.burns, disc.subintervals_per_burn)
     settings = SCPSettings.from_spec(s)
-    rows = [_lcvx_row(case, disc.grid_steps, s.backend, repeat), _scp_row(program, settings, repeat)]
+    rows = [_lcvx_row(case, disc.grid_steps, s.backend, repeat), _lcvx_cvxpy_row(case, disc.grid_steps, repeat),
+            _scp_row(program, settings, repeat)]
     if casadi_available() if with_ipopt is None else with_ipopt:
         rows.append(_ipopt_row(program, repeat))
     return rows
@@ -172,15 +191,20 @@ def _by_method(rows: Sequence[RendezvousBenchRow], method: str) -> RendezvousBen
 
 
 def _notes(rows: Sequence[RendezvousBenchRow]) -> list[str]:
-    """Targets met or not, the SCP-IPOPT burn-time agreement, then failures."""
+    """Targets met or not, the cvxpy-lcvx and SCP-IPOPT burn-time agreements, then failures."""
     lines = []
-    lcvx, scp, ipopt = (_by_method(rows, m) for m in ("lcvx", "scp_arcs", "ipopt"))
+    lcvx, lcvx_cvxpy, scp, ipopt = (_by_method(rows, m) for m in ("lcvx", LCVX_CVXPY, "scp_arcs", "ipopt"))
     if lcvx is not None and lcvx.ok and lcvx.solver_s is not None:
         met = "met" if lcvx.solver_s < LCVX_SOLVER_TARGET_S else "NOT met"
         lines.append(f"lcvx solver time {lcvx.solver_s:.4f} s vs target < {LCVX_SOLVER_TARGET_S:g} s: {met}")
     if scp is not None and scp.ok and scp.wall_s is not None:
         met = "met" if scp.wall_s < SCP_WALL_TARGET_S else "NOT met"
         lines.append(f"scp_arcs wall time {scp.wall_s:.4f} s vs target < {SCP_WALL_TARGET_S:g} s: {met}")
+    if lcvx is not None and lcvx_cvxpy is not None and lcvx.ok and lcvx_cvxpy.ok:
+        rel = abs(lcvx_cvxpy.burn_time_s - lcvx.burn_time_s) / lcvx.burn_time_s
+        lines.append(f"{LCVX_CVXPY} vs lcvx burn time (same SOCP, uncondensed vs condensed): relative "
+                     f"difference {rel:.2e}; cvxpy compile {lcvx_cvxpy.setup_s:.4f} s + solve "
+                     f"{lcvx_cvxpy.solver_s:.4f} s vs lcvx solver {lcvx.solver_s:.4f} s")
     if scp is not None and ipopt is not None and scp.ok and ipopt.ok:
         rel = abs(scp.burn_time_s - ipopt.burn_time_s) / ipopt.burn_time_s
         lines.append(f"scp_arcs vs ipopt burn time (same NLP): relative difference {rel:.2e}")
@@ -208,17 +232,21 @@ def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: 
     header = [
         f"# convexguid rendezvous benchmark: lcvx vs scp_arcs vs IPOPT on `{Path(problem_path).name}`",
         "",
-        *environment_lines(("numpy", "scipy", "clarabel", "casadi")),
+        *environment_lines(("numpy", "scipy", "clarabel", "cvxpy", "casadi")),
         f"- Command: `{command}`",
         "",
         f"Best of {repeat} runs per method, times in seconds. `lcvx`: one SOCP on {steps} (zero-order hold); "
         "`wall s` includes building it, `solver s` is the convex solver alone, `iterations` its interior-point "
-        "iterations. `scp_arcs`: Wang & Tang's burn/coast NLP by SCP; `wall s` = `convexify s` (maps and "
+        f"iterations. `{LCVX_CVXPY}`: the same SOCP stated in cvxpy with the states kept (a cross-check of the "
+        "hand-condensed one), solved by cvxpy's Clarabel interface at the same tolerance; `wall s` is the whole "
+        "call, `solver s` Clarabel's solve time, `setup s` cvxpy's compile time. "
+        "`scp_arcs`: Wang & Tang's burn/coast NLP by SCP; `wall s` = `convexify s` (maps and "
         "Jacobians) + `solver s` (convex subproblems) + bookkeeping, `iterations` are SCP iterations. `ipopt`: "
         f"the same NLP in CasADi, IPOPT with exact Hessian (MUMPS, tol = {IPOPT_TOLERANCE:g}) from the same "
         "initial guess; `wall s` is the solve call only, `setup s` builds the CasADi model. `gap to lcvx` = "
         "(burn time - lcvx burn time) / lcvx burn time; the two transcriptions differ (Hermite-Simpson arcs vs "
-        "zero-order-hold grid), so it is a discretization difference, not an optimality gap. "
+        "zero-order-hold grid), so it is a discretization difference, not an optimality gap (for "
+        f"`{LCVX_CVXPY}` it is the same program, so only the solvers' round-off). "
         f"Targets: lcvx solver time well under {LCVX_SOLVER_TARGET_S:g} s at 600 steps; scp_arcs wall time "
         f"under {SCP_WALL_TARGET_S:g} s.",
     ]
@@ -230,7 +258,7 @@ def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: 
 
 def run_rendezvous_bench(problem_path: str | PathLike[str], repeat: int,
                          output: str | PathLike[str] | None = None) -> int:
-    """Time ``lcvx``, ``scp_arcs`` and IPOPT on one rendezvous problem, print the table, optionally save it.
+    """Time ``lcvx`` (condensed and in cvxpy), ``scp_arcs`` and IPOPT on one problem; print, optionally save.
 
     Parameters
     ----------

@@ -23,8 +23,9 @@ from convexguid.families.rendezvous.case import (
     verify_track,
 )
 from convexguid.families.rendezvous.lcvx import solve_lcvx
-from convexguid.scp.engine import IterationRecord, solve_scp
 from convexguid.scp.problem import SCPSettings
+from convexguid.scp.state import IterationRecord
+from convexguid.scp.verified import Check, Repair, solve_verified
 from convexguid.solution import Solution, Trajectory
 
 
@@ -35,6 +36,7 @@ def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None)
     disc = spec.discretization
     lcvx = solve_lcvx(case, disc.grid_steps, spec.solver.backend) if (
         spec.method == "lcvx" or spec.certify) else None
+    rounds = []
     if spec.method == "lcvx":
         plan = lcvx
     elif lcvx is not None and lcvx.status == "infeasible":
@@ -42,10 +44,11 @@ def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None)
         plan = replace(lcvx, message=f"certified by lcvx on {disc.grid_steps} steps: {lcvx.message}",
                        size=_arcs_program(case, spec).size(), iterations=0)
     else:
-        plan = _solve_arcs(case, spec, log)
+        plan, rounds = _solve_arcs(case, spec, log)
     track = propagate_thrust(case, plan.thrust, spec.verification.grid_points, spec.verification.rtol,
                              spec.verification.atol)
-    verification = verify_track(case, track, spec.verification) if plan.status == "converged" else None
+    verification = verify_track(case, track, spec.verification) if plan.status in ("converged", "unverified") \
+        else None
     extras = {"burn_time_s": plan.objective if plan.status == "converged" else None,
               "num_burns": len(plan.burns),
               "burn_arcs_s": [[b.start_s, b.end_s] for b in plan.burns],
@@ -59,28 +62,59 @@ def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None)
         wall_time_s=time.perf_counter() - start, solver=spec.solver.backend, message=plan.message,
         verification=verification, history=plan.history, nodes=plan.nodes,
         dense=Trajectory(track.t, state_columns(case.dim, track.states, track.u, case.accel)),
-        extras=extras, timing=plan.timing)
+        extras=extras, timing=plan.timing, repair_rounds=rounds)
+
+
+class ArcsChecker:
+    """The family's side of the engine's check-repair loop for ``scp_arcs``.
+
+    ``check`` flies the plan (full thrust along the normalised interpolated direction) with SciPy
+    and checks the thrust bound and the final state. ``repair`` refines the mesh when the final
+    state misses the target. The engine flies the normalised linear interpolation of the node
+    directions, whose error falls as :math:`h^2` (measured: 2.74 m at 12 sub-intervals per burn,
+    1.20 m at 19), so the sub-intervals per burn grow by :math:`1.2 (e/e_{tol})^{1/2}` (1.5x to 4x),
+    with the last plan interpolated onto the new mesh as the start.
+    """
+
+    def __init__(self, case: Rendezvous, settings) -> None:
+        self.case, self.settings = case, settings
+
+    def check(self, program: ArcsProgram, x: np.ndarray) -> Check:
+        s = self.settings
+        track = propagate_thrust(self.case, program.thrust_plan(x), s.grid_points, s.rtol, s.atol)
+        return Check(verify_track(self.case, track, s), track)
+
+    def repair(self, program: ArcsProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None:
+        errors, s = check.verification.final_errors, self.settings
+        excess = max(errors["final_position_error_m"] / s.final_position_tol_m,
+                     errors["final_velocity_error_mps"] / s.final_velocity_tol_mps)
+        if excess <= 1.0:
+            return None  # the final state is met; a thrust-bound violation is not the mesh's to repair
+        old = program.layout.subintervals
+        factor = min(max(1.2 * excess**0.5, 1.5), 4.0)
+        new = int(np.ceil(old * factor))
+        finer, x0 = program.refined(x, new)
+        return Repair(finer, x0, f"mesh refined from {old} to {new} sub-intervals per burn "
+                                 f"(final-state error {excess:.3g} x tolerance)")
 
 
 def _arcs_program(case: Rendezvous, spec):
     return ArcsProgram(case, spec.discretization.burns, spec.discretization.subintervals_per_burn)
 
 
-def _solve_arcs(case: Rendezvous, spec, log) -> RendezvousPlan:
-    s = spec.solver
-    program = _arcs_program(case, spec)
-    settings = SCPSettings.from_spec(s)
-    result = solve_scp(program, settings, log)
+def _solve_arcs(case: Rendezvous, spec, log) -> tuple[RendezvousPlan, list]:
+    outcome = solve_verified(_arcs_program(case, spec), SCPSettings.from_spec(spec.solver),
+                             ArcsChecker(case, spec.verification), log)
+    program, result = outcome.program, outcome.result
     states, dirs, durations = program.layout.split(result.x)
     times = program.node_times(durations)
     nodes = Trajectory(times, state_columns(case.dim, states, dirs, case.accel))
     burns = program.burn_arcs(result.x)
-    extras = {"arc_durations_s": durations.tolist(),
+    extras = {"arc_durations_s": durations.tolist(), "subintervals_per_burn": program.layout.subintervals,
               "planned_direction_norm_min": _interpolated_norm_min(times, dirs, burns)}
-    return RendezvousPlan(result.status, result.message, result.objective, result.iterations, program.size(),
-                          burns, program.thrust_plan(result.x), nodes,
-                          result.timing(),
-                          extras, result.history)
+    plan = RendezvousPlan(outcome.status, outcome.message, result.objective, result.iterations, program.size(),
+                          burns, program.thrust_plan(result.x), nodes, result.timing(), extras, result.history)
+    return plan, outcome.rounds
 
 
 def _interpolated_norm_min(times: np.ndarray, dirs: np.ndarray, burns: tuple[BurnArc, ...]) -> float:

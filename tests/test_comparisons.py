@@ -1,0 +1,226 @@
+"""Cross-method tables of the validation report: groups declared in the problem files, inputs linked between cases.
+
+No solves here: the tables are rendered from synthetic results (the end-to-end Guo comparison is in
+``test_quaternion_attitude.py``), and the run order and link overrides are checked on loaded specs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from convexguid.api import solve
+from convexguid.cli import main
+from convexguid.errors import SpecError
+from convexguid.report import comparisons
+from convexguid.report.comparisons import TABLES, check_comparisons, comparison_sections
+from convexguid.report.validation import CaseResult, link_overrides, run_order
+from convexguid.scp.problem import ProgramSize
+from convexguid.solution import Solution
+from convexguid.spec import load_problem
+from convexguid.verify import ConstraintCheck, Verification
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+MULTICONE = [PROBLEMS / f"wang_multicone_{n}.yaml" for n in ("path_transfer", "time", "energy")]
+GUO = [PROBLEMS / f"guo2011_{n}.yaml" for n in ("adaptive", "scp_time", "scp_energy")]
+GUO_ENERGY = GUO[2]
+
+
+def _solution(spec, wall_time_s=1.0, checks=(), **extras) -> Solution:
+    verification = Verification(grid_points=100, checks=tuple(checks), final_state_error=0.0, final_errors={},
+                                passed=True)
+    return Solution(problem=spec.name, family=spec.family, method=spec.method, status="converged", objective=0.0,
+                    iterations=1, size=ProgramSize(1, 0, 0), wall_time_s=wall_time_s, solver="test",
+                    verification=verification, extras=extras)
+
+
+def _result(spec, sol) -> CaseResult:
+    return CaseResult(spec, sol, (), ())
+
+
+def _rows(lines: list[str]) -> list[list[str]]:
+    return [line.strip("| ").split(" | ") for line in lines if line.startswith("| ") and "| method |" not in line]
+
+
+def _write(tmp_path: Path, source: Path, old: str, new: str) -> Path:
+    text = source.read_text()
+    assert old in text
+    path = tmp_path / source.name
+    path.write_text(text.replace(old, new))
+    return path
+
+
+# --- the problem files ------------------------------------------------------------------------------------
+
+
+def test_the_problem_files_declare_both_groups():
+    groups = {}
+    for path in MULTICONE + GUO:
+        entry = load_problem(path).reference.comparison
+        groups.setdefault(entry.table, []).append((entry.role, entry.label))
+    assert groups == {
+        "multicone": [("baseline", "path transfer (paper's planner)"), ("min_time", "SCP, minimum time"),
+                      ("min_energy", "SCP, minimum energy (t_f = 1.3 x minimum time)")],
+        "forbidden_attitude": [("baseline", "potential-function controller (Fig. 3 case, closed loop, disturbed)"),
+                               ("min_time", "SCP, minimum time"),
+                               ("min_energy", "SCP, minimum energy at the controller's maneuver time")]}
+    check_comparisons([load_problem(p) for p in MULTICONE + GUO])
+
+
+@pytest.mark.parametrize("old,new,needle", [
+    ("role: min_time}", "role: min_time, colour: red}", "reference.comparison.colour: unknown key"),
+    ("role: min_time}", "role: fastest}", "reference.comparison.role"),
+    ('label: "SCP, minimum time"', 'label: ""', "reference.comparison.label"),
+])
+def test_bad_comparison_block_is_a_one_line_error(tmp_path, old, new, needle):
+    path = _write(tmp_path, GUO[1], old, new)
+    with pytest.raises(SpecError, match="^[^\n]*$") as err:
+        load_problem(path)
+    assert needle in str(err.value)
+
+
+def test_unknown_table_column_or_figure_and_duplicate_roles_are_refused_before_solving(tmp_path):
+    specs = [load_problem(p) for p in GUO]
+    bad_table = load_problem(_write(tmp_path, GUO[1], "table: forbidden_attitude", "table: forbidden"))
+    with pytest.raises(SpecError, match=r"comparison\.table: unknown table .*known tables: multicone"):
+        check_comparisons([bad_table])
+    bad_column = load_problem(_write(tmp_path, GUO[0], "forbidden_angle: min_theta_b_deg", "theta: min_theta_b_deg"))
+    with pytest.raises(SpecError, match=r"figures\.theta: not a column of table 'forbidden_attitude'"):
+        check_comparisons([bad_column])
+    bad_figure = load_problem(_write(tmp_path, GUO[0], "energy: energy_N2m2s", "energy: energy_J"))
+    with pytest.raises(SpecError, match=r"figures\.energy: not a figure of family 'potential_function'"):
+        check_comparisons([bad_figure])
+    twin = load_problem(_write(tmp_path, GUO[1], "name: guo2011-scp-time", "name: guo2011-scp-time-2"))
+    with pytest.raises(SpecError, match="'guo2011-scp-time' already has this role"):
+        check_comparisons([*specs, twin])
+
+
+# --- boundary.tf_from -------------------------------------------------------------------------------------
+
+
+def test_tf_from_is_an_unresolved_input_link():
+    spec = load_problem(GUO_ENERGY)
+    assert spec.boundary.tf_s is None
+    [(key, link_key, link)] = spec.input_links()
+    assert (key, link_key, link.problem, link.figure) == ("boundary.tf_s", "boundary.tf_from", "guo2011-adaptive",
+                                                          "maneuver_time_01deg_s")
+    resolved = load_problem(GUO_ENERGY, ["boundary.tf_from=null", "boundary.tf_s=196.8"])
+    assert resolved.boundary.tf_s == 196.8 and resolved.input_links() == ()
+
+
+@pytest.mark.parametrize("overrides,needle", [
+    (["boundary.tf_s=100"], "boundary.tf_from: boundary.tf_from and boundary.tf_s are both set"),
+    (["boundary.tf_min_time_factor=1.3"], "boundary.tf_from and boundary.tf_min_time_factor are both set"),
+    (["objective=time"], "boundary.tf_from: minimum time has a free final time"),
+    (["boundary.tf_from={problem: guo2011-adaptive}"], "boundary.tf_from.figure: missing required key"),
+])
+def test_bad_tf_from_is_a_one_line_error(overrides, needle):
+    with pytest.raises(SpecError) as err:
+        load_problem(GUO_ENERGY, overrides)
+    assert "\n" not in str(err.value) and needle in str(err.value)
+
+
+def test_solving_an_unresolved_link_is_refused(capsys):
+    with pytest.raises(SpecError, match="only `convexguid validate` resolves.*set boundary.tf_s"):
+        solve(GUO_ENERGY)
+    assert main(["solve", str(GUO_ENERGY), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "boundary.tf_from" in err and "convexguid validate" in err
+
+
+def test_linked_cases_run_after_the_case_they_name():
+    specs = [load_problem(p) for p in (GUO_ENERGY, MULTICONE[0], GUO[1], GUO[0])]
+    order = run_order(specs)
+    assert [specs[i].name for i in order] == ["wang-multicone-path-transfer", "guo2011-scp-time",
+                                              "guo2011-adaptive", "guo2011-scp-energy"]
+    assert run_order(specs[1:]) == [0, 1, 2]
+
+
+def test_a_link_to_a_missing_case_or_figure_is_refused_before_solving(tmp_path):
+    with pytest.raises(SpecError, match=r"boundary\.tf_from\.problem: not another case .*'guo2011-adaptive'"):
+        run_order([load_problem(GUO_ENERGY), load_problem(GUO[1])])
+    wrong = load_problem(GUO_ENERGY, ["boundary.tf_from.figure=maneuver_time_s"])
+    with pytest.raises(SpecError, match=r"tf_from\.figure: not a figure of 'guo2011-adaptive'"):
+        run_order([wrong, load_problem(GUO[0])])
+    self_link = load_problem(GUO_ENERGY, ["boundary.tf_from.problem=guo2011-scp-energy"])
+    with pytest.raises(SpecError, match="not another case"):
+        run_order([self_link])
+
+
+def test_link_overrides_pass_the_figure_in():
+    spec, controller = load_problem(GUO_ENERGY), load_problem(GUO[0])
+    sol = _solution(controller, maneuver_time_01deg_s=196.8)
+    assert link_overrides(spec, {controller.name: sol}) == ["boundary.tf_from=null", "boundary.tf_s=196.8"]
+    assert link_overrides(load_problem(GUO[1]), {}) == []
+    with pytest.raises(SpecError, match="has no finite maneuver_time_01deg_s"):
+        link_overrides(spec, {controller.name: _solution(controller, maneuver_time_01deg_s=None)})
+
+
+# --- rendering --------------------------------------------------------------------------------------------
+
+
+def _multicone_results(order=(0, 1, 2)):
+    pt, tm, en = (load_problem(p) for p in MULTICONE)
+    clearance = {"eigenaxis_min_angle_deg": {"body1": 0.093, "body2": 0.02, "body3": 21.191, "body4": 42.602},
+                 "cones": [{"name": "body1", "half_angle_deg": 20.0, "keep_out": True},
+                           {"name": "body2", "half_angle_deg": 15.0, "keep_out": True},
+                           {"name": "body3", "half_angle_deg": 12.0, "keep_out": True},
+                           {"name": "body4", "half_angle_deg": 20.0, "keep_out": True}]}
+    results = [_result(pt, _solution(pt, wall_time_s=9.0, maneuver_time_s=113.0, planning_time_s=0.2,
+                                     min_cone_margin_deg=4.562, energy=0.6043, **clearance)),
+               _result(tm, _solution(tm, wall_time_s=4.0, maneuver_time_s=43.152, min_cone_margin_deg=0.022,
+                                     energy=0.5685, **clearance)),
+               _result(en, _solution(en, wall_time_s=7.5, maneuver_time_s=56.098, min_cone_margin_deg=0.02,
+                                     energy=0.08114, **clearance))]
+    return [results[i] for i in order]
+
+
+def test_multicone_table_is_rendered_from_the_results_alone(monkeypatch):
+    def no_solve(*args, **kwargs):
+        raise AssertionError("the report must not solve")
+
+    monkeypatch.setattr("convexguid.api.solve", no_solve)
+    lines = comparison_sections(_multicone_results())
+    assert lines[1] == f"## {TABLES['multicone'].title}"
+    assert _rows(lines) == [
+        ["path transfer (paper's planner)", "113.000", "0.200", "4.562", "0.6043", "yes"],
+        ["SCP, minimum time", "43.152", "4.000", "0.022", "0.5685", "yes"],
+        ["SCP, minimum energy (t_f = 1.3 x minimum time)", "56.098", "7.500", "0.020", "0.08114", "yes"]]
+    text = "\n".join(lines)
+    assert "is 61.8% shorter than the path-transfer plan and takes 20.00x its planning time" in text
+    assert ("body1 0.093 deg, body2 0.020 deg, body3 21.191 deg, body4 42.602 deg; cones 1 and 2 "
+            "(20 and 15 deg half-angles) are broken.") in text
+
+
+def test_rows_follow_the_results_and_sentences_need_their_roles():
+    lines = comparison_sections(_multicone_results((2, 0)))
+    assert [r[0] for r in _rows(lines)] == ["SCP, minimum energy (t_f = 1.3 x minimum time)",
+                                            "path transfer (paper's planner)"]
+    assert "% shorter" not in "\n".join(lines)
+    assert comparison_sections(_multicone_results((1,))) == []
+
+
+def test_forbidden_attitude_table_uses_the_rows_figures():
+    ctrl, tm = (load_problem(p) for p in GUO[:2])
+    en = load_problem(GUO_ENERGY, ["boundary.tf_from=null", "boundary.tf_s=196.8"])
+    forbidden = ConstraintCheck("forbidden_guo_forbidden_deg", 10.04, 10.0, "min")
+    results = [
+        _result(ctrl, _solution(ctrl, wall_time_s=0.77, maneuver_time_01deg_s=196.8, maneuver_time_s=260.0,
+                                energy_N2m2s=11.52, min_theta_b_deg=23.52)),
+        _result(en, _solution(en, wall_time_s=6.5, checks=[forbidden], maneuver_time_s=196.8, energy=1.818)),
+        _result(tm, _solution(tm, wall_time_s=6.0, checks=[forbidden], maneuver_time_s=85.32, energy=60.61))]
+    lines = comparison_sections(results)
+    assert _rows(lines) == [
+        ["potential-function controller (Fig. 3 case, closed loop, disturbed)", "196.80", "11.52", "23.52", "0.770",
+         "yes"],
+        ["SCP, minimum energy at the controller's maneuver time", "196.80", "1.818", "10.04", "6.500", "yes"],
+        ["SCP, minimum time", "85.32", "60.61", "10.04", "6.000", "yes"]]
+    assert ("uses 84.2% less energy (1.818 against 11.52 N^2 m^2 s); the minimum-time plan finishes in 85.3 s."
+            in "\n".join(lines))
+
+
+def test_report_code_names_no_problem():
+    source = Path(comparisons.__file__).read_text()
+    for path in MULTICONE + GUO:
+        assert load_problem(path).name not in source
