@@ -193,10 +193,10 @@ def test_multicone_table_is_rendered_from_the_results_alone(monkeypatch):
             "(20 and 15 deg half-angles) are broken.") in text
 
 
-def test_rows_follow_the_results_and_sentences_need_their_roles():
+def test_rows_follow_their_roles_and_sentences_need_them():
     lines = comparison_sections(_multicone_results((2, 0)))
-    assert [r[0] for r in _rows(lines)] == ["SCP, minimum energy (t_f = 1.3 x minimum time)",
-                                            "path transfer (paper's planner)"]
+    assert [r[0] for r in _rows(lines)] == ["path transfer (paper's planner)",
+                                            "SCP, minimum energy (t_f = 1.3 x minimum time)"]
     assert "% shorter" not in "\n".join(lines)
     assert comparison_sections(_multicone_results((1,))) == []
 
@@ -214,8 +214,8 @@ def test_forbidden_attitude_table_uses_the_rows_figures():
     assert _rows(lines) == [
         ["potential-function controller (Fig. 3 case, closed loop, disturbed)", "196.80", "11.52", "23.52", "0.770",
          "yes"],
-        ["SCP, minimum energy at the controller's maneuver time", "196.80", "1.818", "10.04", "6.500", "yes"],
-        ["SCP, minimum time", "85.32", "60.61", "10.04", "6.000", "yes"]]
+        ["SCP, minimum time", "85.32", "60.61", "10.04", "6.000", "yes"],
+        ["SCP, minimum energy at the controller's maneuver time", "196.80", "1.818", "10.04", "6.500", "yes"]]
     assert ("uses 84.2% less energy (1.818 against 11.52 N^2 m^2 s); the minimum-time plan finishes in 85.3 s."
             in "\n".join(lines))
 

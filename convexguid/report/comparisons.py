@@ -2,7 +2,8 @@
 
 A case joins a table through its problem file, ``reference.comparison: {table: <id>, label: <row label>}``
 (optionally ``role`` and ``figures``, see :class:`~convexguid.spec.common.ComparisonEntry`). This module only
-renders the results the validation run hands it: one row per case, in the order of the results; the sentences
+renders the results the validation run hands it: one row per case, ordered by role (baseline, minimum time,
+minimum energy, then the rest in the order of the results); the sentences
 under a table are computed from the rows present, found by their ``role`` (a sentence whose roles are missing
 is left out). A column shows a summary figure (or a figure computed from the solution); a row's
 ``figures`` names the summary key standing for a column where the default does not apply (e.g. a simulated
@@ -208,8 +209,16 @@ def comparison_sections(results: Sequence) -> list[str]:
     lines: list[str] = []
     for table_id, table in TABLES.items():
         if len(rows.get(table_id, ())) >= 2:
-            lines += render_table(table, rows[table_id])
+            lines += render_table(table, sorted(rows[table_id], key=_role_order))
     return lines
+
+
+ROLE_ORDER = ("baseline", "min_time", "min_energy")
+"""Rows of a table go in this order of their roles (rows without a role last, in problem order)."""
+
+
+def _role_order(row: Row) -> int:
+    return ROLE_ORDER.index(row.role) if row.role in ROLE_ORDER else len(ROLE_ORDER)
 
 
 def _cell(value: float | None, fmt: str) -> str:
