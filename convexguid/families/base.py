@@ -10,6 +10,7 @@ matplotlib, CasADi) when they are called.
 from __future__ import annotations
 
 import argparse
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from os import PathLike
@@ -35,7 +36,8 @@ class Family:
     solve : callable
         ``solve(spec, log) -> Solution``; for a simulated family, the closed-loop simulation.
     plot : callable
-        ``plot(solution, out_dir) -> list[Path]``; imports matplotlib only when called.
+        ``plot(solution, out_dir, save) -> list[Path]``, ``save`` the shared figure writer
+        (:func:`convexguid.report.plots.save_figure`); imports matplotlib only when called.
     verification_method : str
         How the solution is checked, as the report words it ("Dense verification (N points, <this>)").
     simulated : bool
@@ -54,3 +56,18 @@ class Family:
     simulated: bool = False
     key_figures: tuple[tuple[str, str], ...] = ()
     bench: Callable[[str | PathLike[str], argparse.Namespace], int] | None = None
+
+
+def lazy(target: str) -> Callable:
+    """The function ``"package.module:name"``, imported at its first call.
+
+    A family's ``__init__`` hands these to :class:`Family`, so loading a problem file imports
+    neither the SCP engine nor matplotlib nor CasADi.
+    """
+    module_name, _, name = target.partition(":")
+
+    def call(*args, **kwargs):
+        return getattr(importlib.import_module(module_name), name)(*args, **kwargs)
+
+    call.__name__ = call.__qualname__ = name
+    return call

@@ -15,7 +15,7 @@ from convexguid.solution import Solution
 def plot_solution(solution: Solution, out_dir: Path) -> list[Path]:
     """Write the PNG figures of the solution's family into ``out_dir`` (created if missing); return the paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    return get_family(solution.family).plot(solution, out_dir)
+    return get_family(solution.family).plot(solution, out_dir, save_figure)
 
 
 def save_figure(fig, ax, title: str, ylabel: str, path: Path) -> Path:

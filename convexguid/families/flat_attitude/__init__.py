@@ -7,34 +7,14 @@ and ``bench`` (SCP vs IPOPT against the polynomial degree).
 
 from __future__ import annotations
 
-from convexguid.families.base import Family
+from convexguid.families.base import Family, lazy
 from convexguid.families.flat_attitude.spec import FlatAttitudeProblem
-
-
-def _solve(spec, log=None):
-    from convexguid.families.flat_attitude.solve import solve_flat_attitude
-
-    return solve_flat_attitude(spec, log=log)
-
-
-def _plot(solution, out_dir):
-    from convexguid.families.flat_attitude.plots import plot_flat_attitude
-    from convexguid.report.plots import save_figure
-
-    return plot_flat_attitude(solution, out_dir, save_figure)
-
-
-def _bench(problem_path, args):
-    from convexguid.families.flat_attitude.bench import bench_command
-
-    return bench_command(problem_path, args)
-
 
 FAMILY = Family(
     name="flat_attitude",
     spec_model=FlatAttitudeProblem,
-    solve=_solve,
-    plot=_plot,
+    solve=lazy("convexguid.families.flat_attitude.solve:solve_flat_attitude"),
+    plot=lazy("convexguid.families.flat_attitude.plots:plot_flat_attitude"),
     verification_method="SciPy DOP853 re-propagation of the plan",
-    bench=_bench,
+    bench=lazy("convexguid.families.flat_attitude.bench:bench_command"),
 )

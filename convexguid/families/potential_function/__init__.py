@@ -6,7 +6,7 @@ on the reaction-wheel plant (:mod:`convexguid.sim`). Modules here: ``spec`` (pro
 
 from __future__ import annotations
 
-from convexguid.families.base import Family
+from convexguid.families.base import Family, lazy
 from convexguid.families.potential_function.spec import PotentialFunctionProblem
 
 
@@ -17,18 +17,11 @@ def _solve(spec, log=None):
     return simulate_problem(spec)
 
 
-def _plot(solution, out_dir):
-    from convexguid.families.potential_function.plots import plot_potential_function
-    from convexguid.report.plots import save_figure
-
-    return plot_potential_function(solution, out_dir, save_figure)
-
-
 FAMILY = Family(
     name="potential_function",
     spec_model=PotentialFunctionProblem,
     solve=_solve,
-    plot=_plot,
+    plot=lazy("convexguid.families.potential_function.plots:plot_potential_function"),
     verification_method="closed-loop simulation",
     simulated=True,
     key_figures=(

@@ -8,34 +8,14 @@ histories), ``reference`` (CasADi/IPOPT on the same NLP) and ``bench`` (SCP vs I
 
 from __future__ import annotations
 
-from convexguid.families.base import Family
+from convexguid.families.base import Family, lazy
 from convexguid.families.quaternion_attitude.spec import QuaternionAttitudeProblem
-
-
-def _solve(spec, log=None):
-    from convexguid.families.quaternion_attitude.solve import solve_quaternion_attitude
-
-    return solve_quaternion_attitude(spec, log=log)
-
-
-def _plot(solution, out_dir):
-    from convexguid.families.quaternion_attitude.plots import plot_quaternion_attitude
-    from convexguid.report.plots import save_figure
-
-    return plot_quaternion_attitude(solution, out_dir, save_figure)
-
-
-def _bench(problem_path, args):
-    from convexguid.families.quaternion_attitude.bench import bench_command
-
-    return bench_command(problem_path, args)
-
 
 FAMILY = Family(
     name="quaternion_attitude",
     spec_model=QuaternionAttitudeProblem,
-    solve=_solve,
-    plot=_plot,
+    solve=lazy("convexguid.families.quaternion_attitude.solve:solve_quaternion_attitude"),
+    plot=lazy("convexguid.families.quaternion_attitude.plots:plot_quaternion_attitude"),
     verification_method="SciPy DOP853 re-propagation of the plan",
-    bench=_bench,
+    bench=lazy("convexguid.families.quaternion_attitude.bench:bench_command"),
 )

@@ -8,34 +8,14 @@ Modules: ``spec`` (problem file), ``case`` (problem data, thrust plans, propagat
 
 from __future__ import annotations
 
-from convexguid.families.base import Family
+from convexguid.families.base import Family, lazy
 from convexguid.families.rendezvous.spec import RendezvousProblem
-
-
-def _solve(spec, log=None):
-    from convexguid.families.rendezvous.solve import solve_rendezvous
-
-    return solve_rendezvous(spec, log=log)
-
-
-def _plot(solution, out_dir):
-    from convexguid.families.rendezvous.plots import plot_rendezvous
-    from convexguid.report.plots import save_figure
-
-    return plot_rendezvous(solution, out_dir, save_figure)
-
-
-def _bench(problem_path, args):
-    from convexguid.families.rendezvous.bench import bench_command
-
-    return bench_command(problem_path, args)
-
 
 FAMILY = Family(
     name="rendezvous",
     spec_model=RendezvousProblem,
-    solve=_solve,
-    plot=_plot,
+    solve=lazy("convexguid.families.rendezvous.solve:solve_rendezvous"),
+    plot=lazy("convexguid.families.rendezvous.plots:plot_rendezvous"),
     verification_method="SciPy DOP853 re-propagation of the plan",
     key_figures=(
         ("burn_time_s", "total burn time, s"),
@@ -45,5 +25,5 @@ FAMILY = Family(
         ("lcvx_gap_rel", "(scp_arcs - lcvx) / lcvx"),
         ("planned_direction_norm_min", "smallest norm of the interpolated direction on burns (1 at nodes)"),
     ),
-    bench=_bench,
+    bench=lazy("convexguid.families.rendezvous.bench:bench_command"),
 )
