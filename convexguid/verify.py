@@ -17,7 +17,8 @@ from scipy.integrate import solve_ivp
 
 from convexguid.dynamics.rigid_body import rigid_body_rhs
 from convexguid.errors import SolverError
-from convexguid.rotations import quat_angle_between, quat_to_dcm
+from convexguid.geometry import PointingCone
+from convexguid.rotations import quat_angle_between
 
 
 @dataclass(frozen=True)
@@ -91,18 +92,12 @@ def propagate_attitude(inertia: np.ndarray, torque: Callable[[float], np.ndarray
     return AttitudeTrack(sol.t, q, sol.y[4:].T, np.array([torque(t) for t in sol.t]))
 
 
-def keep_out_angles_deg(q: np.ndarray, body_axis: np.ndarray, inertial_dir: np.ndarray) -> np.ndarray:
-    """Angle between the body axis and the inertial direction, :math:`\\arccos(b^T C_{BI}(q) r)`, in degrees."""
-    cosines = np.einsum("i,nij,j->n", body_axis, quat_to_dcm(q), inertial_dir)
-    return np.degrees(np.arccos(np.clip(cosines, -1.0, 1.0)))
-
-
 def verify_attitude_track(track: AttitudeTrack, torque_max: float | np.ndarray,
-                          cones: Sequence[tuple[str, np.ndarray, np.ndarray, float]],
+                          cones: Sequence[PointingCone],
                           q_target: np.ndarray, omega_target: np.ndarray, constraint_tol: float,
                           attitude_tol_rad: float, rate_tol_radps: float,
                           rate_max: float | None = None) -> Verification:
-    """Check torque box, keep-out cones (``(name, body_axis, inertial_dir, half_angle_deg)``),
+    """Check torque box, keep-out cones (:class:`~convexguid.geometry.PointingCone`),
     optional rate box, and the final attitude and rate against the target.
 
     Path constraints pass when their violation is at most ``constraint_tol`` times
@@ -113,9 +108,9 @@ def verify_attitude_track(track: AttitudeTrack, torque_max: float | np.ndarray,
     if rate_max is not None:
         checks.append(ConstraintCheck("rate_degps", float(np.degrees(np.max(np.abs(track.omega)))),
                                       float(np.degrees(rate_max)), "max"))
-    for name, body_axis, inertial_dir, half_angle_deg in cones:
-        angles = keep_out_angles_deg(track.q, body_axis, inertial_dir)
-        checks.append(ConstraintCheck(f"keep_out_{name}_deg", float(angles.min()), float(half_angle_deg), "min"))
+    for cone in cones:
+        angles = cone.angles_deg(track.q)
+        checks.append(ConstraintCheck(f"keep_out_{cone.name}_deg", float(angles.min()), cone.half_angle_deg, "min"))
     attitude_error = float(quat_angle_between(track.q[-1], q_target))
     rate_error = float(np.linalg.norm(track.omega[-1] - omega_target))
     path_ok = all(c.violation <= constraint_tol * max(1.0, abs(c.bound)) for c in checks)

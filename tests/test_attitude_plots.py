@@ -15,12 +15,12 @@ from convexguid.families.quaternion_attitude.plots import (
     split_at_wrap,
     tracked_axes,
 )
-from convexguid.planners.path_transfer import eigenaxis_path
+from convexguid.geometry import eigenaxis_path, keep_out_angles_deg
 from convexguid.report.plots import plot_solution
 from convexguid.rotations import dcm_to_quat, quat_conjugate, quat_multiply, quat_sign_continuous
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution, Trajectory
-from convexguid.verify import ConstraintCheck, Verification, keep_out_angles_deg
+from convexguid.verify import ConstraintCheck, Verification
 
 SUN = {"name": "sun", "body_axis": [0, 0, 1], "inertial_dir": [-np.cos(np.radians(10)), 0, np.sin(np.radians(10))],
        "half_angle_deg": 20.0, "keep_out": True}

@@ -8,21 +8,11 @@ import numpy as np
 import pytest
 
 from convexguid.errors import SpecError
-from convexguid.planners import (
-    PathTransferCone,
-    PathTransferProblem,
-    eigenaxis_path,
-    multicone_scenario,
-    plan_path_transfer,
-)
-from convexguid.planners.path_transfer import (
-    bound_evaluation,
-    eigenaxis_rotation,
-    pointing_evaluation,
-    relaxed_node_count,
-)
+from convexguid.geometry import PointingCone, eigenaxis_path, eigenaxis_rotation, keep_out_angles_deg
+from convexguid.planners import PathTransferProblem, multicone_scenario, plan_path_transfer
+from convexguid.planners.path_transfer import bound_evaluation, pointing_evaluation, relaxed_node_count
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_derivative
-from convexguid.verify import keep_out_angles_deg, propagate_attitude
+from convexguid.verify import propagate_attitude
 
 REL = 1e-9  # round-off allowance on the torque and rate boxes
 
@@ -50,7 +40,7 @@ def single_cone_problem(direction, half_angle_deg: float = 10.0, **kw) -> PathTr
     """90 deg slew about body x: the +z boresight sweeps from inertial +z to -y."""
     return PathTransferProblem(
         inertia=np.diag([10.0, 12.0, 15.0]), boresight_body=[0, 0, 1], q0=[0, 0, 0, 1],
-        qf=axis_angle_to_quat([1, 0, 0], math.pi / 2), cones=(PathTransferCone("c", direction,
+        qf=axis_angle_to_quat([1, 0, 0], math.pi / 2), cones=(PointingCone("c", [0, 0, 1], direction,
                                                                                math.radians(half_angle_deg)),),
         torque_max=0.1, rate_max=math.radians(3.0), **kw)
 
@@ -207,8 +197,8 @@ def test_no_maneuver_when_q0_equals_qf():
     ({"qf": [0.0, 0.0, 0.0, 0.0]}, "qf"),
     ({"torque_max": 0.0}, "torque_max"),
     ({"rate_max": -1.0}, "rate_max"),
-    ({"cones": (PathTransferCone("sun", [0, 0, 1], 0.2),)}, "initial boresight is inside cone 'sun'"),
-    ({"cones": (PathTransferCone("sun", [0, -1, 0], 0.2),)}, "final boresight is inside cone 'sun'"),
+    ({"cones": (PointingCone("sun", [0, 0, 1], [0, 0, 1], 0.2),)}, "initial boresight is inside cone 'sun'"),
+    ({"cones": (PointingCone("sun", [0, 0, 1], [0, -1, 0], 0.2),)}, "final boresight is inside cone 'sun'"),
     ({"inertia": np.diag([1.0, -1.0, 1.0])}, "inertia"),
     ({"boresight_body": [0, 0, 0]}, "boresight_body"),
 ])
@@ -221,9 +211,9 @@ def test_bad_input_raises_spec_error(change, match):
 
 def test_bad_cone_and_path_arguments():
     with pytest.raises(SpecError, match="half_angle_rad"):
-        PathTransferCone("x", [1, 0, 0], 0.0)
+        PointingCone("x", [0, 0, 1], [1, 0, 0], 0.0)
     with pytest.raises(SpecError, match="inertial_dir"):
-        PathTransferCone("x", [0, 0, 0], 0.1)
+        PointingCone("x", [0, 0, 1], [0, 0, 0], 0.1)
     with pytest.raises(SpecError, match="n must be"):
         eigenaxis_path([0, 0, 0, 1], [0, 0, 1, 0], 1)
     with pytest.raises(SpecError, match="q0"):

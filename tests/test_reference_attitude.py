@@ -19,16 +19,16 @@ pytest.importorskip("casadi")
 
 from convexguid.families.quaternion_attitude.program import (  # noqa: E402
     AttitudeCase,
-    Cone,
     Forbidden,
     QuaternionProgram,
+    cone_cosine,
     eigenaxis_start,
 )
 from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt  # noqa: E402
 from convexguid.families.quaternion_attitude.solve import build_case  # noqa: E402
+from convexguid.geometry import PointingCone, keep_out_angles_deg  # noqa: E402
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between  # noqa: E402
 from convexguid.spec import load_problem  # noqa: E402
-from convexguid.verify import keep_out_angles_deg  # noqa: E402
 
 MULTICONE = Path(__file__).resolve().parents[1] / "problems" / "wang_multicone_time.yaml"
 DEFECT_TOL = 1e-6
@@ -93,7 +93,7 @@ def test_full_inertia_keep_in_and_forbidden_attitude():
     """
     inertia = np.array([[10.0, 1.0, 0.5], [1.0, 12.0, -0.3], [0.5, -0.3, 15.0]])
     zenith = np.array([0.0, 0.0, 1.0])
-    case = _rest_to_rest(inertia, cones=(Cone("zenith", zenith, zenith, np.radians(40.0), keep_out=False),),
+    case = _rest_to_rest(inertia, cones=(PointingCone("zenith", zenith, zenith, np.radians(40.0), keep_out=False),),
                          forbidden=(Forbidden("midway", axis_angle_to_quat([0, 0, 1], np.pi / 4), np.radians(38.0)),))
     guess, tf_guess = eigenaxis_start(case, K_SMALL)
     margin = np.radians(1.0)
@@ -145,5 +145,5 @@ def test_multicone_minimum_time_clears_every_cone():
     q = program.nodes(result.x)[:, :4]
     assert len(case.cones) == 4
     for cone in case.cones:
-        cosine, _ = cone.cos_angle(q)
-        assert np.all(cosine <= np.cos(cone.half_angle) + CONSTRAINT_TOL), cone.name
+        cosine, _ = cone_cosine(cone, q)
+        assert np.all(cosine <= np.cos(cone.half_angle_rad) + CONSTRAINT_TOL), cone.name

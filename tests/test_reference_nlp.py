@@ -17,7 +17,12 @@ import pytest
 
 pytest.importorskip("casadi")
 
-from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem  # noqa: E402
+from convexguid.families.flat_attitude.program import (  # noqa: E402
+    FlatAttitudeProblem,
+    FlatAttitudeProgram,
+    build_problem,
+    cone_cosine,
+)
 from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt  # noqa: E402
 from convexguid.reference import ReferenceResult  # noqa: E402
 from convexguid.scp.engine import SCPResult, solve_scp  # noqa: E402
@@ -58,7 +63,7 @@ def _solve_both(case: str) -> tuple[FlatAttitudeProblem, SCPResult, ReferenceRes
 def _min_separation_deg(problem: FlatAttitudeProblem, x: np.ndarray) -> float:
     """Smallest angle between sensor and sun over the constraint points (nodes and check points), deg."""
     cone = problem.cones[0]
-    cosines = cone.cos_angle(problem.path_interpolation @ x.reshape(-1, 3))
+    cosines = cone_cosine(cone, problem.path_interpolation @ x.reshape(-1, 3))
     return float(np.degrees(np.arccos(np.clip(cosines, -1.0, 1.0))).min())
 
 

@@ -2,16 +2,14 @@
 
 from convexguid.planners.path_transfer import (
     PathSegment,
-    PathTransferCone,
     PathTransferError,
     PathTransferProblem,
     PathTransferResult,
-    eigenaxis_path,
     multicone_scenario,
     plan_path_transfer,
 )
 
 __all__ = [
-    "PathSegment", "PathTransferCone", "PathTransferError", "PathTransferProblem", "PathTransferResult",
-    "eigenaxis_path", "multicone_scenario", "plan_path_transfer",
+    "PathSegment", "PathTransferError", "PathTransferProblem", "PathTransferResult",
+    "multicone_scenario", "plan_path_transfer",
 ]

@@ -71,17 +71,11 @@ from numpy.typing import ArrayLike, NDArray
 from convexguid.checks import inertia_matrix, positive, unit_vector
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.errors import ConvexGuidError, SpecError
-from convexguid.rotations import (
-    axis_angle_to_quat,
-    quat_conjugate,
-    quat_multiply,
-    quat_normalize,
-    quat_rotate,
-    quat_to_dcm,
-)
+from convexguid.geometry import PointingCone, eigenaxis_path, eigenaxis_rotation
+from convexguid.rotations import axis_angle_to_quat, quat_multiply, quat_rotate, quat_to_dcm
 
 __all__ = [
-    "ACTIONS", "PathSegment", "PathTransferCone", "PathTransferError", "PathTransferProblem",
+    "ACTIONS", "PathSegment", "PathTransferError", "PathTransferProblem",
     "PathTransferResult", "bound_evaluation", "eigenaxis_path", "eigenaxis_rotation", "multicone_scenario",
     "plan_path_transfer", "pointing_evaluation", "relaxed_node_count",
 ]
@@ -104,32 +98,6 @@ def pointing_evaluation(angle: ArrayLike, half_angle: ArrayLike) -> NDArray:
     :math:`\alpha` on :math:`[0, \pi]`.
     """
     return np.expm1(np.cos(angle) - np.cos(half_angle))
-
-
-def eigenaxis_rotation(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, float]:
-    r"""Body-frame Euler axis and angle in :math:`[0, \pi]` of the shortest rotation from q0 to qf (R1).
-
-    Quaternions scalar-last, body relative to inertial; :math:`q_f = q_0 \otimes [\sin(\Phi/2)e, \cos(\Phi/2)]`
-    up to sign. For :math:`\Phi = 0` the axis is +z (any axis would do). Paper eqs. (16)-(19).
-    """
-    qe = quat_multiply(quat_conjugate(quat_normalize(q0)), quat_normalize(qf))
-    qe = -qe if qe[3] < 0 else qe
-    s = float(np.linalg.norm(qe[:3]))
-    axis = qe[:3] / s if s > 1e-15 else np.array([0.0, 0.0, 1.0])
-    return axis, 2.0 * math.atan2(s, qe[3])
-
-
-def eigenaxis_path(q0: ArrayLike, qf: ArrayLike, n: int) -> NDArray:
-    r"""n attitudes equally spaced in angle along the eigenaxis slew q0 -> qf, shape ``(n, 4)`` (eqs. 20-21).
-
-    Quaternions scalar-last, body relative to inertial; the sequence is sign-continuous, starts at q0 and
-    ends at :math:`\pm q_f`. Usable as an SCP initial guess. Raises SpecError for a zero quaternion or n < 2.
-    """
-    if int(n) != n or n < 2:
-        raise SpecError(f"eigenaxis_path: n must be an integer >= 2, got {n!r}")
-    q0, qf = unit_vector("q0", q0, 4), unit_vector("qf", qf, 4)
-    axis, angle = eigenaxis_rotation(q0, qf)
-    return quat_multiply(q0, axis_angle_to_quat(axis, np.linspace(0.0, angle, int(n))))
 
 
 def _torque_coefficient(inertia: NDArray, axis: NDArray, angle: float, ramp: NDArray) -> NDArray:
@@ -159,20 +127,6 @@ def relaxed_node_count(j_torque: float, j_rate: float, reference_nodes: int, wei
 
 
 @dataclass(frozen=True, eq=False)
-class PathTransferCone:
-    """Keep-out cone: unit inertial axis ``inertial_dir`` (normalised here) and half-angle in rad."""
-
-    name: str
-    inertial_dir: NDArray
-    half_angle_rad: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "inertial_dir", unit_vector(f"cone {self.name!r} inertial_dir", self.inertial_dir, 3))
-        if not 0 < self.half_angle_rad < math.pi:
-            raise SpecError(f"cone {self.name!r} half_angle_rad must lie in (0, pi), got {self.half_angle_rad!r}")
-
-
-@dataclass(frozen=True, eq=False)
 class PathTransferProblem:
     """Rest-to-rest planning problem and planner settings (SI units, rad; quaternions scalar-last, B rel. I).
 
@@ -181,7 +135,8 @@ class PathTransferProblem:
     inertia : (3, 3) symmetric positive definite inertia, kg m^2.
     boresight_body : camera boresight b in body axes (normalised here).
     q0, qf : initial and final attitude (normalised here).
-    cones : keep-out cones; the boresight must stay outside every one (eq. 8).
+    cones : keep-out :class:`~convexguid.geometry.PointingCone` s; the boresight must stay outside every one
+        (eq. 8). Only their inertial directions and half-angles are used: the planner points ``boresight_body``.
     torque_max, rate_max : per-axis boxes :math:`|u_i| \\le u_{max}`, :math:`|\\omega_i| \\le \\omega_{max}`
         (eqs. 12-13), N m and rad/s.
     margin_rad : clearance m kept from every cone edge (R6, R8).
@@ -198,7 +153,7 @@ class PathTransferProblem:
     boresight_body: NDArray
     q0: NDArray
     qf: NDArray
-    cones: tuple[PathTransferCone, ...]
+    cones: tuple[PointingCone, ...]
     torque_max: float
     rate_max: float
     margin_rad: float = math.radians(2.0)
@@ -216,8 +171,9 @@ class PathTransferProblem:
         object.__setattr__(self, "q0", unit_vector("q0", self.q0, 4))
         object.__setattr__(self, "qf", unit_vector("qf", self.qf, 4))
         object.__setattr__(self, "cones", tuple(self.cones))
-        if not all(isinstance(c, PathTransferCone) for c in self.cones):
-            raise SpecError(f"cones must be PathTransferCone instances, got {[type(c).__name__ for c in self.cones]}")
+        if not all(isinstance(c, PointingCone) and c.keep_out for c in self.cones):
+            raise SpecError("cones must be keep-out PointingCone instances, got "
+                            f"{[(type(c).__name__, getattr(c, 'keep_out', None)) for c in self.cones]}")
         for name in ("torque_max", "rate_max", "neighborhood_rad", "node_period_s", "node_weight",
                      "check_step_rad", "arc_step_rad"):
             positive(name, getattr(self, name))
@@ -494,6 +450,6 @@ def multicone_scenario(**overrides: object) -> PathTransferProblem:
     problem = PathTransferProblem(
         inertia=np.diag([10.0, 12.0, 15.0]), boresight_body=np.array([0.0, 0.0, 1.0]),
         q0=np.array([0.0, 0.0, 0.0, 1.0]), qf=axis_angle_to_quat([1.0, -1.0, 0.5], math.radians(160.0)),
-        cones=tuple(PathTransferCone(n, np.array(d), math.radians(a)) for n, d, a in bodies),
+        cones=tuple(PointingCone(n, np.array([0.0, 0.0, 1.0]), np.array(d), math.radians(a)) for n, d, a in bodies),
         torque_max=0.1, rate_max=math.radians(3.0))
     return replace(problem, **overrides) if overrides else problem

@@ -33,6 +33,7 @@ from pydantic_core import PydanticCustomError
 
 from convexguid.backends import check_backend_name
 from convexguid.errors import BackendError
+from convexguid.geometry import PointingCone
 
 SPEC_CONFIG = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 """Model configuration of every spec model (unknown keys, coercion and inf/nan are errors)."""
@@ -210,7 +211,7 @@ class Spacecraft(SpecModel):
         return readonly(np.array(self.inertia_kgm2))
 
 
-class KeepOutCone(SpecModel):
+class KeepOutSpec(SpecModel):
     """Keep-out cone: the body axis must stay more than ``half_angle_deg`` away from an inertial direction.
 
     Attributes
@@ -247,6 +248,10 @@ class KeepOutCone(SpecModel):
         """Cone half-angle, rad."""
         return math.radians(self.half_angle_deg)
 
+    def pointing_cone(self) -> PointingCone:
+        """This cone as a keep-out :class:`~convexguid.geometry.PointingCone` (unit vectors, rad)."""
+        return PointingCone.from_spec(self, keep_out=True)
+
 
 def _as_tuple(v: object) -> tuple[object, ...]:
     if not isinstance(v, (list, tuple)):
@@ -268,8 +273,8 @@ def named_list(model: type) -> object:
     return Annotated[tuple[model, ...], BeforeValidator(_as_tuple), AfterValidator(_unique_names)]
 
 
-KeepOutList = named_list(KeepOutCone)
-"""A YAML list of :class:`KeepOutCone` with unique names, stored as a tuple."""
+KeepOutList = named_list(KeepOutSpec)
+"""A YAML list of :class:`KeepOutSpec` with unique names, stored as a tuple."""
 
 
 class SolverSettings(SpecModel):

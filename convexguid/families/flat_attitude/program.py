@@ -30,13 +30,14 @@ planning for space vehicles under multiple constraints", J. Dynamics and Control
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.interpolate import CubicHermiteSpline
 
 from convexguid.dynamics.rigid_body import euler_torque
+from convexguid.geometry import PointingCone
 from convexguid.rotations import euler321_rates_from_body, euler321_rates_matrix, euler321_to_dcm
 from convexguid.scp.derivatives import pointwise_jacobian
 from convexguid.scp.problem import (
@@ -50,18 +51,9 @@ from convexguid.scp.problem import (
 from convexguid.transcription import MappedChebyshev
 
 
-@dataclass(frozen=True)
-class KeepOutCone:
-    """Body axis ``body_axis`` must stay more than ``half_angle_rad`` from inertial ``inertial_dir`` (unit vectors)."""
-
-    name: str
-    body_axis: np.ndarray
-    inertial_dir: np.ndarray
-    half_angle_rad: float
-
-    def cos_angle(self, rpy: np.ndarray) -> np.ndarray:
-        """:math:`r_B^T C_{BI}(\\zeta) r_I` at each row of ``rpy`` (complex-safe)."""
-        return np.einsum("i,nij,j->n", self.body_axis, euler321_to_dcm(rpy), self.inertial_dir)
+def cone_cosine(cone: PointingCone, rpy: np.ndarray) -> np.ndarray:
+    """:math:`r_B^T C_{BI}(\\zeta) r_I` at each row of ``rpy`` (3-2-1 Euler angles; complex-safe)."""
+    return cone.cos_angle(euler321_to_dcm(rpy))
 
 
 def euler321_body_acceleration(z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
@@ -99,7 +91,7 @@ class FlatAttitudeProblem:
     rate0: np.ndarray
     rpyf: np.ndarray
     ratef: np.ndarray
-    cones: tuple[KeepOutCone, ...]
+    cones: tuple[PointingCone, ...]
     grid: MappedChebyshev
     check_points_per_interval: int = 2
     extra_points: tuple[float, ...] = ()
@@ -222,10 +214,10 @@ class FlatAttitudeProgram:
         blocks = []
         z_path = path @ z
         for cone in p.cones:
-            values = cone.cos_angle(z_path) - np.cos(cone.half_angle_rad + p.cone_margin_rad)
+            values = cone_cosine(cone, z_path) - np.cos(cone.half_angle_rad + p.cone_margin_rad)
             jac = None
             if jacobians:
-                local = pointwise_jacobian(cone.cos_angle, (z_path,), 0)
+                local = pointwise_jacobian(partial(cone_cosine, cone), (z_path,), 0)
                 jac = (local[:, None, :] * path[:, :, None]).reshape(path.shape[0], -1)
             blocks.append(ConstraintBlock(f"keep_out_{cone.name}", values, jac, "cos"))
         return Evaluation(u.ravel(), jac_u, tuple(blocks))
@@ -234,8 +226,7 @@ class FlatAttitudeProgram:
 def build_problem(spec) -> FlatAttitudeProblem:
     """Turn a validated ``flat_attitude`` spec (:mod:`convexguid.families.flat_attitude.spec`) into SI arrays."""
     b = spec.boundary
-    cones = tuple(KeepOutCone(c.name, c.body_axis_unit, c.inertial_dir_unit, c.half_angle_rad)
-                  for c in spec.keep_out)
+    cones = tuple(PointingCone.from_spec(c) for c in spec.keep_out)
     grid = MappedChebyshev(spec.discretization.nodes, spec.discretization.map_epsilon)
     return FlatAttitudeProblem(spec.name, spec.spacecraft.inertia_matrix, spec.spacecraft.torque_max_Nm,
                                b.t0_s, b.tf_s, b.initial.rpy_rad, b.initial.rate_radps, b.final.rpy_rad,

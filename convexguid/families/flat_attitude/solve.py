@@ -15,13 +15,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
+from convexguid.families.flat_attitude.program import (
+    FlatAttitudeProblem,
+    FlatAttitudeProgram,
+    build_problem,
+    cone_cosine,
+)
 from convexguid.rotations import euler321_to_quat, quat_to_euler321
 from convexguid.scp.problem import SCPSettings
 from convexguid.scp.state import IterationRecord
 from convexguid.scp.verified import Check, Repair, grown_margin, solve_verified
 from convexguid.solution import Solution, Trajectory, planned_solution
-from convexguid.verify import Verification, keep_out_angles_deg, propagate_attitude, verify_attitude_track
+from convexguid.verify import Verification, propagate_attitude, verify_attitude_track
 
 
 def torque_command(problem: FlatAttitudeProblem, x: np.ndarray) -> Callable[[float], np.ndarray]:
@@ -41,8 +46,7 @@ def verify_plan(problem: FlatAttitudeProblem, x: np.ndarray, settings) -> tuple[
     q0 = euler321_to_quat(problem.rpy0)
     track = propagate_attitude(problem.inertia, torque_command(problem, x), q0, problem.rate0, t_grid,
                                settings.rtol, settings.atol, max_step=(problem.tf - problem.t0) / 200)
-    cones = [(c.name, c.body_axis, c.inertial_dir, np.degrees(c.half_angle_rad)) for c in problem.cones]
-    verification = verify_attitude_track(track, problem.torque_max, cones, euler321_to_quat(problem.rpyf),
+    verification = verify_attitude_track(track, problem.torque_max, problem.cones, euler321_to_quat(problem.rpyf),
                                          problem.ratef, settings.constraint_tol, settings.final_attitude_tol_rad,
                                          settings.final_rate_tol_radps)
     lam = problem.time_scale * (t_grid - problem.t0) - 1.0
@@ -58,7 +62,7 @@ def verify_plan(problem: FlatAttitudeProblem, x: np.ndarray, settings) -> tuple[
     for i in range(3):
         columns[f"u{i + 1}_Nm"] = track.torque[:, i]
     for c in problem.cones:
-        columns[f"keep_out_{c.name}_deg"] = keep_out_angles_deg(track.q, c.body_axis, c.inertial_dir)
+        columns[c.column] = c.angles_deg(track.q)
     return verification, Trajectory(track.t, columns)
 
 
@@ -86,7 +90,7 @@ def worst_interpolated_points(problem: FlatAttitudeProblem, x: np.ndarray, setti
     excess = np.max(np.abs(interp @ problem.torques(x)), axis=1) / problem.torque_max - 1.0
     z = interp @ x.reshape(-1, 3)
     for cone in problem.cones:
-        excess = np.maximum(excess, cone.cos_angle(z) - np.cos(cone.half_angle_rad))
+        excess = np.maximum(excess, cone_cosine(cone, z) - np.cos(cone.half_angle_rad))
     return _worst_of_runs(lam, excess, REFINEMENT_TOLERANCE * settings.constraint_tol)
 
 
@@ -133,7 +137,7 @@ class FlatAttitudeChecker:
         tol = self.settings.constraint_tol
         lam = problem.time_scale * (check.track.t - problem.t0) - 1.0
         for cone in problem.cones:
-            c = by_name[f"keep_out_{cone.name}_deg"]
+            c = by_name[cone.column]
             if c.violation > 0:
                 points.append(_worst_of_runs(lam, c.bound - check.track.columns[c.name], 0.0))
                 cone_excess = max(cone_excess, c.violation)

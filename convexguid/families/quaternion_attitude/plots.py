@@ -15,7 +15,9 @@ r"""Plots of a ``quaternion_attitude`` solution, after Wang, Xu, Li (seed 003) F
 The body axis :math:`b` of a body-relative-to-inertial quaternion q points along
 :math:`C_{BI}(q)^T b = C_{IB}(q)\,b` in inertial axes (``quat_rotate(quat_conjugate(q), b)``). The cone
 geometry comes from ``solution.extras["cones"]``: a list of ``{"name", "body_axis", "inertial_dir",
-"half_angle_deg", "keep_out"}``; without it only the time histories and angle plots are drawn.
+"half_angle_deg", "keep_out"}`` (:meth:`convexguid.geometry.PointingCone.to_dict`, read back from the summary
+JSON as written, so the limits drawn are the summary's numbers); without it only the time histories and
+angle plots are drawn.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from numpy.typing import ArrayLike, NDArray  # noqa: E402
 
-from convexguid.planners.path_transfer import eigenaxis_path  # noqa: E402
+from convexguid.geometry import eigenaxis_path  # noqa: E402
 from convexguid.rotations import quat_conjugate, quat_rotate  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 

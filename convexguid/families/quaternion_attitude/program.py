@@ -54,7 +54,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.dynamics.rigid_body import euler_torque
-from convexguid.planners.path_transfer import eigenaxis_rotation
+from convexguid.geometry import PointingCone, eigenaxis_rotation
 from convexguid.rotations import axis_angle_to_quat, quat_multiply, quat_rate_matrix, skew
 from convexguid.scp.problem import (
     ConstraintBlock,
@@ -69,28 +69,18 @@ NX, NU = 7, 3
 NODE = NX + NU
 
 
-@dataclass(frozen=True)
-class Cone:
-    """Pointing cone between ``body_axis`` and ``inertial_dir``: keep-out (angle > half) or keep-in (angle < half)."""
+def cone_cosine(cone: PointingCone, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:math:`c = b^T C_{BI}(q) r` on rows of ``q`` (unnormalised quadratic form) and its gradient in q.
 
-    name: str
-    body_axis: np.ndarray
-    inertial_dir: np.ndarray
-    half_angle: float
-    keep_out: bool = True
-
-    def cos_angle(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:math:`c = b^T C_{BI}(q) r` on rows of ``q`` (unnormalised quadratic form) and its gradient in q.
-
-        .. math:: c = (w^2 - v^Tv)\\, b^Tr + 2 (b^Tv)(v^Tr) - 2w\\, v^T(r\\times b)
-        """
-        b, r = self.body_axis, self.inertial_dir
-        v, w = q[:, :3], q[:, 3]
-        br, rxb = b @ r, np.cross(r, b)
-        c = (w**2 - np.sum(v * v, 1)) * br + 2 * (v @ b) * (v @ r) - 2 * w * (v @ rxb)
-        grad_v = -2 * v * br + 2 * np.outer(v @ r, b) + 2 * np.outer(v @ b, r) - 2 * w[:, None] * rxb
-        grad_w = 2 * w * br - 2 * (v @ rxb)
-        return c, np.column_stack([grad_v, grad_w])
+    .. math:: c = (w^2 - v^Tv)\\, b^Tr + 2 (b^Tv)(v^Tr) - 2w\\, v^T(r\\times b)
+    """
+    b, r = cone.body_axis, cone.inertial_dir
+    v, w = q[:, :3], q[:, 3]
+    br, rxb = b @ r, np.cross(r, b)
+    c = (w**2 - np.sum(v * v, 1)) * br + 2 * (v @ b) * (v @ r) - 2 * w * (v @ rxb)
+    grad_v = -2 * v * br + 2 * np.outer(v @ r, b) + 2 * np.outer(v @ b, r) - 2 * w[:, None] * rxb
+    grad_w = 2 * w * br - 2 * (v @ rxb)
+    return c, np.column_stack([grad_v, grad_w])
 
 
 @dataclass(frozen=True)
@@ -115,7 +105,7 @@ class AttitudeCase:
     w0: np.ndarray
     qf: np.ndarray
     wf: np.ndarray
-    cones: tuple[Cone, ...] = ()
+    cones: tuple[PointingCone, ...] = ()
     forbidden: tuple[Forbidden, ...] = ()
     tf: float | None = None
 
@@ -390,13 +380,13 @@ class QuaternionProgram:
         rows = np.repeat(np.arange(n1), 4)
         cols = (np.arange(n1)[:, None] * NODE + np.arange(4)).ravel()
         for cone in self.case.cones:
-            kind = "keep_out" if cone.keep_out else "keep_in"
+            kind = cone.kind
             if cone.keep_out:
-                bound, sign = np.cos(min(np.pi, cone.half_angle + self.margin)), 1.0
+                bound, sign = np.cos(min(np.pi, cone.half_angle_rad + self.margin)), 1.0
             else:
-                bound, sign = np.cos(max(0.0, cone.half_angle - self.margin)), -1.0
-            c, grad = cone.cos_angle(q)
-            c_mid, grad_mid = cone.cos_angle(q_mid)
+                bound, sign = np.cos(max(0.0, cone.half_angle_rad - self.margin)), -1.0
+            c, grad = cone_cosine(cone, q)
+            c_mid, grad_mid = cone_cosine(cone, q_mid)
             jac = jac_mid = None
             if jacobians:
                 jac = sp.coo_matrix((sign * grad.ravel(), (rows, cols)), shape=(n1, self.num_variables))

@@ -173,9 +173,9 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
         cosine = ca.vertcat(*[_cone_cosine(ca, path_q[:, k], cone.body_axis, cone.inertial_dir)
                               for k in range(n1 + K)])
         if cone.keep_out:
-            groups.append((cosine, -np.inf, np.cos(min(np.pi, cone.half_angle + margin))))
+            groups.append((cosine, -np.inf, np.cos(min(np.pi, cone.half_angle_rad + margin))))
         else:
-            groups.append((cosine, np.cos(max(0.0, cone.half_angle - margin)), np.inf))
+            groups.append((cosine, np.cos(max(0.0, cone.half_angle_rad - margin)), np.inf))
     for fb in case.forbidden:
         bound = np.cos(min(np.pi, fb.min_angle + margin) / 2)
         groups.append((ca.mtimes(ca.DM(np.asarray(fb.q, dtype=float)).T, path_q).T, -bound, bound))

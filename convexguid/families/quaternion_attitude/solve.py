@@ -18,13 +18,13 @@ import numpy as np
 
 from convexguid.families.quaternion_attitude.program import (
     AttitudeCase,
-    Cone,
     Forbidden,
     QuaternionProgram,
     eigenaxis_guess,
     eigenaxis_start,
 )
-from convexguid.planners.path_transfer import PathTransferCone, PathTransferProblem, plan_path_transfer
+from convexguid.geometry import PointingCone
+from convexguid.planners.path_transfer import PathTransferProblem, plan_path_transfer
 from convexguid.rotations import quat_angle_between, quat_sign_continuous
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.scp.state import IterationRecord
@@ -34,7 +34,6 @@ from convexguid.verify import (
     AttitudeTrack,
     ConstraintCheck,
     Verification,
-    keep_out_angles_deg,
     propagate_attitude,
     verify_attitude_track,
 )
@@ -49,10 +48,7 @@ def build_case(spec) -> AttitudeCase:
     q0, qf = np.array(b.initial.q), np.array(b.final.q)
     if q0 @ qf < 0:
         qf = -qf
-    cones = tuple(Cone(c.name, c.body_axis_unit, c.inertial_dir_unit, c.half_angle_rad, True) for c in spec.keep_out)
-    cones += tuple(Cone(c.name, np.array(c.body_axis) / np.linalg.norm(c.body_axis),
-                        np.array(c.inertial_dir) / np.linalg.norm(c.inertial_dir), np.radians(c.half_angle_deg),
-                        False) for c in spec.keep_in)
+    cones = tuple(c.pointing_cone() for c in (*spec.keep_out, *spec.keep_in))
     forbidden = tuple(Forbidden(f.name, np.array(f.quaternion), np.radians(f.min_angle_deg)) for f in spec.forbidden)
     return AttitudeCase(spec.name, sc.inertia_matrix, sc.torque_max_Nm, np.radians(sc.rate_max_degps), b.t0_s, q0,
                         np.array(b.initial.rate_radps), qf, np.array(b.final.rate_radps), cones, forbidden, b.tf_s)
@@ -63,7 +59,8 @@ def path_transfer_problem(case: AttitudeCase) -> PathTransferProblem:
     keep_out = [c for c in case.cones if c.keep_out]
     boresight = keep_out[0].body_axis if keep_out else np.array([0.0, 0.0, 1.0])
     return PathTransferProblem(case.inertia, boresight, case.q0, case.qf,
-                               tuple(PathTransferCone(c.name, c.inertial_dir, c.half_angle) for c in keep_out),
+                               tuple(PointingCone(c.name, c.body_axis, c.inertial_dir, c.half_angle_rad)
+                                     for c in keep_out),  # re-normalised, as the planner always did
                                case.torque_max, case.rate_max)
 
 
@@ -73,13 +70,12 @@ def verify_plan(case: AttitudeCase, t_end: float, torque: Callable[[float], np.n
     t_grid = np.linspace(case.t0, t_end, settings.grid_points)
     track = propagate_attitude(case.inertia, torque, case.q0, case.w0, t_grid, settings.rtol, settings.atol,
                                max_step=max_step)
-    keep_out = [(c.name, c.body_axis, c.inertial_dir, np.degrees(c.half_angle)) for c in case.cones if c.keep_out]
+    keep_out = [c for c in case.cones if c.keep_out]
     base = verify_attitude_track(track, case.torque_max, keep_out, case.qf, case.wf, settings.constraint_tol,
                                  settings.final_attitude_tol_rad, settings.final_rate_tol_radps,
                                  rate_max=case.rate_max)
-    extra = [ConstraintCheck(f"keep_in_{c.name}_deg", float(keep_out_angles_deg(track.q, c.body_axis,
-                                                                                  c.inertial_dir).max()),
-                             float(np.degrees(c.half_angle)), "max") for c in case.cones if not c.keep_out]
+    extra = [ConstraintCheck(c.column, float(c.angles_deg(track.q).max()), c.half_angle_deg, "max")
+             for c in case.cones if not c.keep_out]
     extra += [ConstraintCheck(f"forbidden_{f.name}_deg", float(np.degrees(quat_angle_between(track.q, f.q)).min()),
                               float(np.degrees(f.min_angle)), "min") for f in case.forbidden]
     checks = base.checks + tuple(extra)
@@ -181,8 +177,7 @@ def _energy(track: AttitudeTrack) -> float:
 def _dense_columns(case: AttitudeCase, track: AttitudeTrack) -> dict[str, np.ndarray]:
     cols = _state_columns(track.q, track.omega, track.torque)
     for c in case.cones:
-        kind = "keep_out" if c.keep_out else "keep_in"
-        cols[f"{kind}_{c.name}_deg"] = keep_out_angles_deg(track.q, c.body_axis, c.inertial_dir)
+        cols[c.column] = c.angles_deg(track.q)
     for f in case.forbidden:
         cols[f"forbidden_{f.name}_deg"] = np.degrees(quat_angle_between(track.q, f.q))
     return cols
@@ -190,24 +185,19 @@ def _dense_columns(case: AttitudeCase, track: AttitudeTrack) -> dict[str, np.nda
 
 def cone_margin_deg(case: AttitudeCase, track: AttitudeTrack) -> float | None:
     """Smallest angular clearance to any cone edge along the track, deg (negative inside a keep-out cone)."""
-    margins = []
-    for c in case.cones:
-        angle = keep_out_angles_deg(track.q, c.body_axis, c.inertial_dir)
-        margins.append((angle - np.degrees(c.half_angle)).min() if c.keep_out else
-                       (np.degrees(c.half_angle) - angle).min())
+    margins = [c.margin_deg(track.q).min() for c in case.cones]
     return float(min(margins)) if margins else None
 
 
 def eigenaxis_cone_clearance(case: AttitudeCase, samples: int = 721) -> dict[str, float]:
     """Smallest angle (deg) between each keep-out cone's direction and its body axis along the eigenaxis slew."""
     q = eigenaxis_guess(case, np.linspace(0.0, 1.0, samples))[:, :4]
-    return {c.name: float(keep_out_angles_deg(q, c.body_axis, c.inertial_dir).min()) for c in case.cones if c.keep_out}
+    return {c.name: float(c.angles_deg(q).min()) for c in case.cones if c.keep_out}
 
 
 def cone_geometry(case: AttitudeCase) -> list[dict]:
     """The cones as plain data for the summary and the sky plots."""
-    return [{"name": c.name, "body_axis": c.body_axis.tolist(), "inertial_dir": c.inertial_dir.tolist(),
-             "half_angle_deg": float(np.degrees(c.half_angle)), "keep_out": c.keep_out} for c in case.cones]
+    return [c.to_dict() for c in case.cones]
 
 
 def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:

@@ -19,6 +19,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
+from convexguid.geometry import PointingCone
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between
 from convexguid.spec.common import (
     Direction3,
@@ -38,7 +39,6 @@ from convexguid.spec.common import (
     readonly,
     spec_error,
 )
-from convexguid.verify import keep_out_angles_deg
 
 
 class Attitude(SpecModel):
@@ -109,13 +109,17 @@ class AttitudeSpacecraft(SpecModel):
         return readonly(np.array(self.inertia_kgm2))
 
 
-class KeepInCone(SpecModel):
+class KeepInSpec(SpecModel):
     """``body_axis`` must stay within ``half_angle_deg`` of the inertial ``inertial_dir``."""
 
     name: Annotated[str, Field(min_length=1)]
     body_axis: Direction3
     inertial_dir: Direction3
     half_angle_deg: Annotated[float, Field(gt=0, lt=180)]
+
+    def pointing_cone(self) -> PointingCone:
+        """This cone as a keep-in :class:`~convexguid.geometry.PointingCone` (unit vectors, rad)."""
+        return PointingCone.from_spec(self, keep_out=False)
 
 
 class ForbiddenAttitude(SpecModel):
@@ -145,7 +149,7 @@ class QuaternionAttitudeProblem(ProblemBase):
     spacecraft: AttitudeSpacecraft
     boundary: QuaternionBoundary
     keep_out: KeepOutList = ()
-    keep_in: named_list(KeepInCone) = ()  # type: ignore[valid-type]
+    keep_in: named_list(KeepInSpec) = ()  # type: ignore[valid-type]
     forbidden: named_list(ForbiddenAttitude) = ()  # type: ignore[valid-type]
     objective: Literal["time", "energy"] = "time"
     initial_guess: Literal["eigenaxis", "path_transfer"] = "eigenaxis"
@@ -176,8 +180,7 @@ class QuaternionAttitudeProblem(ProblemBase):
                                      value=value.model_dump() if isinstance(value, ResultLink) else value)
         for i, cone in enumerate(self.keep_out):
             for which in ("initial", "final"):
-                angle = float(keep_out_angles_deg(getattr(b, which).q[None], cone.body_axis_unit,
-                                                  cone.inertial_dir_unit)[0])
+                angle = float(cone.pointing_cone().angles_deg(getattr(b, which).q[None])[0])
                 if angle <= cone.half_angle_deg:
                     raise spec_error(f"the {which} attitude points {cone.name!r}'s body axis {angle:.3g} deg from "
                                      f"its direction, inside the {cone.half_angle_deg:g} deg cone",
