@@ -40,12 +40,6 @@ def _ok_row(rows, method):
     return row
 
 
-SCP_ENERGY_K10_FAILS = pytest.mark.xfail(strict=True, reason=(
-    "SCP minimum energy at K = 10 ends max_iterations ('iterates stalled with constraints violated after a "
-    "phase-1 restart: dynamics_defects by 7.51e-06 scaled') on a feasible NLP: IPOPT solves the same "
-    "Hermite-Simpson NLP at the same tf (Solve_Succeeded, energy 0.0899 N^2 m^2 s)"))
-
-
 def test_path_transfer_row_once(rows):
     row = _ok_row(rows, "path_transfer")
     assert row.intervals is None
@@ -61,7 +55,7 @@ def test_scp_rows_have_positive_times(rows, objective):
     assert row.iterations > 0
 
 
-@pytest.mark.parametrize("solver", [pytest.param("scp", marks=SCP_ENERGY_K10_FAILS), "ipopt"])
+@pytest.mark.parametrize("solver", ["scp", "ipopt"])
 def test_energy_final_time_is_the_factor_times_the_minimum_time(rows, solver):
     if solver == "ipopt":
         pytest.importorskip("casadi")
@@ -70,7 +64,7 @@ def test_energy_final_time_is_the_factor_times_the_minimum_time(rows, solver):
     assert energy.tf_s == pytest.approx(attitude_bench.ENERGY_TF_FACTOR * scp_time.tf_s)
 
 
-@pytest.mark.parametrize("objective", ["time", pytest.param("energy", marks=SCP_ENERGY_K10_FAILS)])
+@pytest.mark.parametrize("objective", ["time", "energy"])
 def test_ipopt_rows_have_positive_times_and_gaps(rows, objective):
     pytest.importorskip("casadi")
     ipopt = _ok_row(rows, f"ipopt {objective}")

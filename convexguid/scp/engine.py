@@ -58,10 +58,11 @@ MAX_PHASE1_RUNS = 3
 """Phase-1 restorations one run may make before a stall with constraints violated ends it."""
 
 NEARLY_FEASIBLE = 100.0
-"""A stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once.
+"""A first stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once.
 
-So small a violation is at the accuracy of the subproblem's solution; raising the penalty only
-makes the merit function noisier, while minimising the violation alone removes it in a few steps.
+So small a violation may be at the accuracy of the subproblem's solution; raising the penalty then
+only makes the merit function noisier, while minimising the violation alone removes it in a few
+steps. A later stall raises the penalty as usual.
 """
 
 
@@ -251,8 +252,11 @@ class SCPAlgorithm:
             state.finish("infeasible", "the elastic phase-1 problem stalls with the constraints still violated: "
                          + describe_violations(state.ev))
             return
+        # Just above the tolerance, round-off in the subproblem may be the cause: restore feasibility once.
+        # If the iterates drift back to an infeasible stall, the penalty is below the multipliers after all.
         nearly_feasible = max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance
-        rho = None if nearly_feasible else self.penalty.escalated(state.penalty, self.objective_at_start)
+        first_try = nearly_feasible and state.phase1_runs == 0
+        rho = None if first_try else self.penalty.escalated(state.penalty, self.objective_at_start)
         if rho is not None:
             # A stationary point of the penalty function that violates the constraints:
             # the penalty is below the multipliers; raise it and go on.
