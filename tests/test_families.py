@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import typing
+from pathlib import Path
 
 import pytest
 
@@ -55,3 +56,32 @@ def test_import_is_light():
             "print(sorted(m for m in sys.modules if m.startswith('matplotlib') or m.endswith(('.solve', '.plots'))))")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert res.stdout.strip() == "[]"
+
+
+PLANNED_CASES = {
+    "flat_attitude": ("cai2018_flat_attitude.yaml", []),
+    "rendezvous": ("wang2003_rendezvous.yaml", []),
+    "quaternion_attitude": ("guo2011_scp_time.yaml", ["discretization.intervals=12"]),
+}
+"""One small committed case per planned family, for the contract test below."""
+
+
+def test_every_planned_family_has_a_contract_case():
+    planned = {name for name, family in FAMILIES.items() if not family.simulated}
+    assert planned == set(PLANNED_CASES)
+    assert all(FAMILIES[name].planning_setup is not None for name in planned)
+
+
+@pytest.mark.parametrize("name", sorted(PLANNED_CASES))
+def test_planning_setup_runs_through_the_engine_loop_to_a_verified_plan(name):
+    """The Family contract alone (program, settings, checker) gives a plan the family's own check passes."""
+    from convexguid.spec import load_problem
+
+    file, overrides = PLANNED_CASES[name]
+    spec = load_problem(Path(__file__).resolve().parents[1] / "problems" / file, overrides)
+    setup = get_family(name).planning_setup(spec)
+    outcome = setup.solve()
+    assert outcome.status == "converged", outcome.message
+    assert outcome.check.verification.passed
+    assert setup.checker.check(outcome.program, outcome.x).verification.passed  # the check is repeatable
+    assert outcome.rounds[-1].passed and outcome.rounds[0].repair == "first solve"

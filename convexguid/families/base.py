@@ -21,6 +21,7 @@ from convexguid.spec.common import ProblemBase
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import IterationRecord
+    from convexguid.scp.verified import PlanningSetup
     from convexguid.solution import Solution
 
 @dataclass(frozen=True)
@@ -44,6 +45,10 @@ class Family:
         Run by ``convexguid simulate`` (a controller in closed loop) instead of planned by ``convexguid solve``.
     key_figures : tuple of (summary key, label)
         Summary figures the validation report lists under each case of the family.
+    planning_setup : callable or None
+        ``planning_setup(spec) -> PlanningSetup`` (:mod:`convexguid.scp.verified`) for a planned family: how it
+        builds the SCP program, with which settings, and its checker (dense verification and repairs). ``solve``
+        runs it through the engine's check-repair loop and summarises; None for a simulated family.
     bench : callable or None
         ``bench(problem_path, args) -> int`` (exit code) for ``convexguid bench``; None if the family has none.
     """
@@ -55,6 +60,7 @@ class Family:
     verification_method: str
     simulated: bool = False
     key_figures: tuple[tuple[str, str], ...] = ()
+    planning_setup: Callable[[ProblemBase], PlanningSetup] | None = None
     bench: Callable[[str | PathLike[str], argparse.Namespace], int] | None = None
 
 

@@ -63,6 +63,20 @@ class PlanChecker(Protocol):
 
 
 @dataclass(frozen=True)
+class PlanningSetup:
+    """Everything the loop needs to plan one problem: the first program, the SCP settings, the family's checker."""
+
+    program: NonconvexProgram
+    settings: SCPSettings
+    checker: PlanChecker
+    budget: int = DEFAULT_REPAIR_BUDGET
+
+    def solve(self, log: Log | None = None) -> VerifiedSolve:
+        """:func:`solve_verified` on this setup."""
+        return solve_verified(self.program, self.settings, self.checker, log, self.budget)
+
+
+@dataclass(frozen=True)
 class RepairRound:
     """One solve of the loop: what was repaired before it, its own SCP iterations and the figures after it."""
 

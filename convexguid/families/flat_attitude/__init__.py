@@ -15,6 +15,7 @@ FAMILY = Family(
     spec_model=FlatAttitudeProblem,
     solve=lazy("convexguid.families.flat_attitude.solve:solve_flat_attitude"),
     plot=lazy("convexguid.families.flat_attitude.plots:plot_flat_attitude"),
+    planning_setup=lazy("convexguid.families.flat_attitude.solve:planning_setup"),
     verification_method="SciPy DOP853 re-propagation of the plan",
     bench=lazy("convexguid.families.flat_attitude.bench:bench_command"),
 )

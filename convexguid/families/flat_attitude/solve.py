@@ -24,7 +24,7 @@ from convexguid.families.flat_attitude.program import (
 from convexguid.rotations import euler321_to_quat, quat_to_euler321
 from convexguid.scp.problem import SCPSettings
 from convexguid.scp.state import IterationRecord
-from convexguid.scp.verified import Check, Repair, grown_margin, solve_verified
+from convexguid.scp.verified import Check, PlanningSetup, Repair, grown_margin
 from convexguid.solution import Solution, Trajectory, planned_solution
 from convexguid.verify import Verification, propagate_attitude, verify_attitude_track
 
@@ -160,13 +160,16 @@ class FlatAttitudeChecker:
         return Repair(FlatAttitudeProgram(problem), x, "; ".join(done))
 
 
+def planning_setup(spec) -> PlanningSetup:
+    """The program of the spec, its SCP settings and the family's checker."""
+    return PlanningSetup(FlatAttitudeProgram(build_problem(spec)), SCPSettings.from_spec(spec.solver),
+                         FlatAttitudeChecker(spec.verification))
+
+
 def solve_flat_attitude(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
     """Plan, verify and summarise a ``flat_attitude`` problem (see the module docstring)."""
     start = time.perf_counter()
-    problem = build_problem(spec)
-    program = FlatAttitudeProgram(problem)
-    outcome = solve_verified(program, SCPSettings.from_spec(spec.solver), FlatAttitudeChecker(spec.verification),
-                             log)
+    outcome = planning_setup(spec).solve(log)
     problem, x = outcome.program.problem, outcome.x
     extras = {"energy": outcome.result.objective, "max_torque_Nm": float(np.abs(problem.torques(x)).max()),
               "map_alpha": problem.grid.alpha, "max_constraint_violation_nodes": outcome.result.max_violation,

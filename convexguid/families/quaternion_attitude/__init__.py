@@ -16,6 +16,7 @@ FAMILY = Family(
     spec_model=QuaternionAttitudeProblem,
     solve=lazy("convexguid.families.quaternion_attitude.solve:solve_quaternion_attitude"),
     plot=lazy("convexguid.families.quaternion_attitude.plots:plot_quaternion_attitude"),
+    planning_setup=lazy("convexguid.families.quaternion_attitude.solve:planning_setup"),
     verification_method="SciPy DOP853 re-propagation of the plan",
     bench=lazy("convexguid.families.quaternion_attitude.bench:bench_command"),
 )

@@ -28,7 +28,7 @@ from convexguid.planners.path_transfer import PathTransferProblem, plan_path_tra
 from convexguid.rotations import quat_angle_between, quat_sign_continuous
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.scp.state import IterationRecord
-from convexguid.scp.verified import Check, Repair, VerifiedSolve, grown_margin, solve_verified
+from convexguid.scp.verified import Check, PlanningSetup, Repair, grown_margin
 from convexguid.solution import Solution, Trajectory, planned_solution
 from convexguid.verify import (
     AttitudeTrack,
@@ -142,23 +142,28 @@ def scp_settings(solver) -> SCPSettings:
     return SCPSettings.from_spec(solver, penalty_unit="objective", penalty_max=PENALTY_RANGE * solver.penalty)
 
 
-def solve_scp_attitude(case: AttitudeCase, spec, log, guess_kind: str) -> VerifiedSolve:
-    """SCP inside the engine's check-repair loop (see :class:`QuaternionChecker`)."""
+def planning_setup(spec, case: AttitudeCase | None = None) -> PlanningSetup:
+    """The first SCP program of ``spec`` (from its initial guess), the settings and the family's checker.
+
+    ``case`` defaults to the spec's own; a minimum-energy solve at a multiple of the minimum time
+    passes the case with that final time. A path-transfer guess that ends at :math:`-q_f` (the same
+    attitude, reached the other way round) takes that sign for the target.
+    """
+    case = build_case(spec) if case is None else case
     K = spec.discretization.intervals
-    if guess_kind == "path_transfer":
+    if spec.initial_guess == "path_transfer":
         plan = plan_path_transfer(path_transfer_problem(case))
         tf_guess = case.tf or plan.maneuver_time_s
         q, w, u = plan.sample(np.linspace(0.0, 1.0, K + 1) * plan.maneuver_time_s)
         q = quat_sign_continuous(q)
-        if q[-1] @ case.qf < 0:  # the path ends at -qf: the same attitude, reached the other way round
+        if q[-1] @ case.qf < 0:
             case = replace(case, qf=-case.qf)
         scale = plan.maneuver_time_s / tf_guess
         guess = np.hstack([q, w * scale, u * scale**2])
     else:
         guess, tf_guess = eigenaxis_start(case, K)
-    program = QuaternionProgram(case, K, guess, tf_guess)
-    return solve_verified(program, scp_settings(spec.solver), QuaternionChecker(case, spec.verification), log,
-                          budget=MAX_TIGHTENINGS)
+    return PlanningSetup(QuaternionProgram(case, K, guess, tf_guess), scp_settings(spec.solver),
+                         QuaternionChecker(case, spec.verification), budget=MAX_TIGHTENINGS)
 
 
 def _state_columns(q: np.ndarray, omega: np.ndarray, torque: np.ndarray) -> dict[str, np.ndarray]:
@@ -208,14 +213,14 @@ def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | Non
     if spec.method == "path_transfer":
         return _solve_path_transfer(case, spec, start, extras)
     if spec.objective == "energy" and case.tf is None:
-        timed = solve_scp_attitude(case, spec, None, spec.initial_guess)
+        timed = planning_setup(spec, case).solve()
         if timed.result.status != "converged":
             timed.message = "minimum time (which sets the energy problem's final time) did not converge: " \
                 + timed.message
             return planned_solution(spec, timed, start, timed.program.size(), extras=extras)
         extras["min_time_s"] = timed.program.final_time(timed.x)
         case = replace(case, tf=spec.boundary.tf_min_time_factor * extras["min_time_s"])
-    outcome = solve_scp_attitude(case, spec, log, spec.initial_guess)
+    outcome = planning_setup(spec, case).solve(log)
     program, x = outcome.program, outcome.x
     tf = program.final_time(x)
     nodes = program.nodes(x)

@@ -16,6 +16,7 @@ FAMILY = Family(
     spec_model=RendezvousProblem,
     solve=lazy("convexguid.families.rendezvous.solve:solve_rendezvous"),
     plot=lazy("convexguid.families.rendezvous.plots:plot_rendezvous"),
+    planning_setup=lazy("convexguid.families.rendezvous.solve:planning_setup"),
     verification_method="SciPy DOP853 re-propagation of the plan",
     key_figures=(
         ("burn_time_s", "total burn time, s"),

@@ -25,7 +25,7 @@ from convexguid.families.rendezvous.case import (
 from convexguid.families.rendezvous.lcvx import solve_lcvx
 from convexguid.scp.problem import SCPSettings
 from convexguid.scp.state import IterationRecord
-from convexguid.scp.verified import Check, Repair, solve_verified
+from convexguid.scp.verified import Check, PlanningSetup, Repair
 from convexguid.solution import Solution, Trajectory
 
 
@@ -102,9 +102,15 @@ def _arcs_program(case: Rendezvous, spec):
     return ArcsProgram(case, spec.discretization.burns, spec.discretization.subintervals_per_burn)
 
 
+def planning_setup(spec) -> PlanningSetup:
+    """The ``scp_arcs`` program of the spec, its SCP settings and the family's checker."""
+    case = build_case(spec)
+    return PlanningSetup(_arcs_program(case, spec), SCPSettings.from_spec(spec.solver),
+                         ArcsChecker(case, spec.verification))
+
+
 def _solve_arcs(case: Rendezvous, spec, log) -> tuple[RendezvousPlan, list]:
-    outcome = solve_verified(_arcs_program(case, spec), SCPSettings.from_spec(spec.solver),
-                             ArcsChecker(case, spec.verification), log)
+    outcome = planning_setup(spec).solve(log)
     program, result = outcome.program, outcome.result
     states, dirs, durations = program.layout.split(result.x)
     times = program.node_times(durations)
