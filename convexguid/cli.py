@@ -129,14 +129,17 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _print_sweep(sol: Solution) -> None:
     """One line per sweep case of a simulation (nothing without a sweep)."""
-    cases = sol.extras.get("sweep") or []
+    from convexguid.families.potential_function.figures import PotentialFunctionFigures
+
+    figures = sol.figures
+    cases = (figures.sweep or ()) if isinstance(figures, PotentialFunctionFigures) else ()
     if cases:
         print(f"{'theta_m deg':>11} {'t 1deg s':>9} {'t 0.1deg s':>10} {'min theta_b deg':>15} "
               f"{'max |u| N m':>11} {'passed':>6}")
     for c in cases:
-        times = [f"{t:.1f}" if t is not None else "-" for t in (c["maneuver_time_1deg_s"], c["maneuver_time_01deg_s"])]
-        print(f"{c['theta_m_deg']:>11g} {times[0]:>9} {times[1]:>10} {c['min_theta_b_deg']:>15.3f} "
-              f"{c['max_abs_torque_Nm']:>11.4g} {'yes' if c['passed'] else 'NO':>6}")
+        times = [f"{t:.1f}" if t is not None else "-" for t in (c.maneuver_time_1deg_s, c.maneuver_time_01deg_s)]
+        print(f"{c.theta_m_deg:>11g} {times[0]:>9} {times[1]:>10} {c.min_theta_b_deg:>15.3f} "
+              f"{c.max_abs_torque_Nm:>11.4g} {'yes' if c.passed else 'NO':>6}")
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:

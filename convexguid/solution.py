@@ -1,20 +1,89 @@
-"""The result of a solve: status, figures, dense trajectory, verification, and the summary JSON."""
+"""The result of a solve: status, typed figures, dense trajectory, verification, and the summary JSON.
+
+Every :class:`Solution` is built by :func:`make_solution` (or :func:`planned_solution`, for a plan that went
+through the engine's check-repair loop). A family's figures are a frozen dataclass derived from
+:class:`Figures`, registered on its :class:`~convexguid.families.base.Family`; their fields are the keys the
+summary JSON adds after the common ones, in field order.
+
+This module imports numpy only (the families' figures modules import it at registry load).
+"""
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from convexguid.scp.problem import ProgramSize
-from convexguid.scp.state import IterationRecord
-from convexguid.scp.verified import RepairRound, VerifiedSolve
-from convexguid.verify import Verification
+if TYPE_CHECKING:
+    from convexguid.scp.problem import ProgramSize
+    from convexguid.scp.state import IterationRecord
+    from convexguid.scp.verified import RepairRound, VerifiedSolve
+    from convexguid.verify import Verification
+
+
+def optional(along: str | None = None) -> Any:
+    """A figure field (default None) left out of the summary while it is None.
+
+    With ``along``, the figure is written (None included) whenever the figure ``along`` is written, and left
+    out otherwise: e.g. the certificate's ``lcvx_burn_time_s`` is null when ``lcvx_status`` says the
+    certificate failed, and absent without a certificate.
+    """
+    return field(default=None, metadata={"optional": True, "along": along})
+
+
+@dataclass(frozen=True)
+class Figures:
+    """Base of a family's figures: a frozen dataclass whose fields are summary keys.
+
+    :meth:`to_dict` keeps the field order; nested dataclasses, lists, tuples, dicts and arrays become JSON-ready
+    lists and dicts, non-finite floats None. A field declared with :func:`optional` is left out while None.
+    """
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        """Every figure this type can carry (its fields, i.e. summary keys), in order."""
+        return tuple(f.name for f in dataclasses.fields(cls))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The figures as summary entries, in field order, without the optional ones that are not set."""
+        specs = {f.name: f for f in dataclasses.fields(self)}
+
+        def written(name: str) -> bool:
+            meta = specs[name].metadata
+            if not meta.get("optional") or getattr(self, name) is not None:
+                return True
+            return meta.get("along") is not None and written(meta["along"])
+
+        return {name: plain(getattr(self, name)) for name in specs if written(name)}
+
+
+def plain(value: Any) -> Any:
+    """``value`` as JSON-ready data: dataclasses and mappings to dicts, sequences and arrays to lists,
+    numpy scalars to Python numbers, non-finite floats to None."""
+    if isinstance(value, Figures):
+        return value.to_dict()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return [plain(v) for v in value.tolist()]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return _finite(value)
+    return value
 
 
 @dataclass(frozen=True)
@@ -35,7 +104,10 @@ class Trajectory:
 
 @dataclass
 class Solution:
-    """Everything a solve produces. :meth:`summary` is the machine-readable contract of design.md."""
+    """Everything a solve produces. :meth:`summary` is the machine-readable contract of design.md.
+
+    Build one with :func:`make_solution` or :func:`planned_solution`.
+    """
 
     problem: str
     family: str
@@ -51,7 +123,7 @@ class Solution:
     history: list[IterationRecord] = field(default_factory=list)
     nodes: Trajectory | None = None
     dense: Trajectory | None = None
-    extras: dict[str, float | int | str | None] = field(default_factory=dict)
+    figures: Figures | None = None
     timing: dict[str, float] = field(default_factory=dict)
     repair_rounds: list[RepairRound] = field(default_factory=list)
 
@@ -59,6 +131,26 @@ class Solution:
     def ok(self) -> bool:
         """Converged and verified."""
         return self.status == "converged" and self.verification is not None and self.verification.passed
+
+    def figure_names(self) -> tuple[str, ...]:
+        """Summary keys of the figures this solution carries, in order (an unset optional figure is not one)."""
+        return tuple(self.figures.to_dict()) if self.figures is not None else ()
+
+    def figure(self, name: str) -> Any:
+        """The figure ``name`` (a summary key) as the summary writes it.
+
+        Raises
+        ------
+        KeyError
+            If this solution carries no such figure; the message lists the ones it has.
+        """
+        figures = self.figures.to_dict() if self.figures is not None else {}
+        if name not in figures:
+            kind = type(self.figures).__name__ if self.figures is not None else "no figures"
+            unset = self.figures is not None and name in self.figures.names()
+            raise KeyError(f"{self.problem}: figure {name!r} is {'not set in' if unset else 'not one of'} this "
+                           f"solution's figures ({kind}); available: {', '.join(figures) or 'none'}")
+        return figures[name]
 
     def summary(self) -> dict:
         out = {
@@ -78,7 +170,8 @@ class Solution:
             "verification": self.verification.to_dict() if self.verification else None,
             "repair_rounds": [r.to_dict() for r in self.repair_rounds],
         }
-        out.update({k: _finite(v) if isinstance(v, float) else v for k, v in self.extras.items()})
+        if self.figures is not None:
+            out.update(self.figures.to_dict())
         return out
 
     def write_summary(self, path: Path) -> None:
@@ -86,24 +179,42 @@ class Solution:
         write_text_atomic(Path(path), json.dumps(self.summary(), indent=2) + "\n")
 
 
+def make_solution(spec, *, status: str, message: str, started: float, objective: float, iterations: int,
+                  size: ProgramSize, solver: str | None = None, verification: Verification | None = None,
+                  history: list[IterationRecord] | None = None, nodes: Trajectory | None = None,
+                  dense: Trajectory | None = None, figures: Figures | None = None,
+                  timing: dict[str, float] | None = None,
+                  repair_rounds: list[RepairRound] | None = None) -> Solution:
+    """The one constructor of a :class:`Solution`.
+
+    Problem, family and method come from ``spec``, the solver from ``spec.solver.backend`` unless ``solver``
+    names it, the wall time is measured from ``started`` (a :func:`time.perf_counter` value) to now.
+    """
+    return Solution(problem=spec.name, family=spec.family, method=spec.method, status=status, objective=objective,
+                    iterations=iterations, size=size, wall_time_s=time.perf_counter() - started,
+                    solver=solver if solver is not None else spec.solver.backend, message=message,
+                    verification=verification, history=list(history or []), nodes=nodes, dense=dense,
+                    figures=figures, timing=dict(timing or {}), repair_rounds=list(repair_rounds or []))
+
+
 def planned_solution(spec, outcome: VerifiedSolve, started: float, size: ProgramSize, *,
                      nodes: Trajectory | None = None, dense: Trajectory | None = None,
-                     extras: dict | None = None) -> Solution:
+                     figures: Figures | None = None) -> Solution:
     """The :class:`Solution` of a plan that went through the engine's check-repair loop.
 
     Status, message, objective, iterations, history, timing, the dense verification and the
     repair rounds come from ``outcome``; the family adds its trajectories and figures.
     """
     result = outcome.result
-    return Solution(problem=spec.name, family=spec.family, method=spec.method, status=outcome.status,
-                    objective=result.objective, iterations=result.iterations, size=size,
-                    wall_time_s=time.perf_counter() - started, solver=spec.solver.backend, message=outcome.message,
-                    verification=outcome.check.verification if outcome.check is not None else None,
-                    history=result.history, nodes=nodes, dense=dense, extras=dict(extras or {}),
-                    timing=result.timing(), repair_rounds=list(outcome.rounds))
+    return make_solution(spec, status=outcome.status, message=outcome.message, started=started,
+                         objective=result.objective, iterations=result.iterations, size=size,
+                         verification=outcome.check.verification if outcome.check is not None else None,
+                         history=result.history, nodes=nodes, dense=dense, figures=figures,
+                         timing=result.timing(), repair_rounds=outcome.rounds)
 
 
 def _finite(value: float | None) -> float | None:
+    """``value`` as a float, None if it is None or not finite (the summary writes no NaN or infinity)."""
     if value is None or not math.isfinite(value):
         return None
     return float(value)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from convexguid.families.quaternion_attitude.figures import ConeGeometry, QuaternionAttitudeFigures
 from convexguid.families.quaternion_attitude.plots import (
     az_el_deg,
     cone_circle,
@@ -22,10 +23,8 @@ from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution, Trajectory
 from convexguid.verify import ConstraintCheck, Verification
 
-SUN = {"name": "sun", "body_axis": [0, 0, 1], "inertial_dir": [-np.cos(np.radians(10)), 0, np.sin(np.radians(10))],
-       "half_angle_deg": 20.0, "keep_out": True}
-EARTH = {"name": "earth", "body_axis": [1, 0, 0], "inertial_dir": [0, 0, -1], "half_angle_deg": 60.0,
-         "keep_out": False}
+SUN = ConeGeometry("sun", (0, 0, 1), (-np.cos(np.radians(10)), 0, np.sin(np.radians(10))), 20.0, True)
+EARTH = ConeGeometry("earth", (1, 0, 0), (0, 0, -1), 60.0, False)
 FILES = {"boresight_sky", "boresight_sphere_3d", "quaternion", "body_rates", "torques", "cone_angles"}
 
 
@@ -56,9 +55,9 @@ def _solution(with_nodes: bool = True, cones: bool = True) -> Solution:
     cols |= {f"omega{i + 1}_degps": np.degrees(omega[:, i]) for i in range(3)}
     cols |= {f"u{i + 1}_Nm": torque[:, i] for i in range(3)}
     for cone in (SUN, EARTH):
-        kind = "keep_out" if cone["keep_out"] else "keep_in"
-        cols[f"{kind}_{cone['name']}_deg"] = keep_out_angles_deg(q, np.array(cone["body_axis"], float),
-                                                                 np.array(cone["inertial_dir"]))
+        kind = "keep_out" if cone.keep_out else "keep_in"
+        cols[f"{kind}_{cone.name}_deg"] = keep_out_angles_deg(q, np.array(cone.body_axis, float),
+                                                              np.array(cone.inertial_dir))
     checks = (ConstraintCheck("torque_Nm", float(np.abs(torque).max()), 0.5, "max"),
               ConstraintCheck("rate_degps", float(np.degrees(np.abs(omega).max())), 5.0, "max"))
     nodes = Trajectory(t[::20], {k: v[::20] for k, v in cols.items()}) if with_nodes else None
@@ -67,7 +66,7 @@ def _solution(with_nodes: bool = True, cones: bool = True) -> Solution:
         status="converged", objective=1.0, iterations=3, size=ProgramSize(10, 5, 5), wall_time_s=0.1,
         solver="none", verification=Verification(len(t), checks, 0.0, {}, True), nodes=nodes,
         dense=Trajectory(t, cols),
-        extras={"cones": [SUN, EARTH], "eigenaxis_min_angle_deg": {"sun": 0.0}} if cones else {})
+        figures=QuaternionAttitudeFigures(eigenaxis_min_angle_deg={"sun": 0.0}, cones=(SUN, EARTH)) if cones else None)
 
 
 @pytest.mark.parametrize("with_nodes", [True, False])
@@ -100,7 +99,7 @@ def test_inertial_axis_matches_the_cone_angle_convention():
     az, el = az_el_deg(boresight[[0, -1]])
     np.testing.assert_allclose(az, [120.0, -120.0], atol=1e-9)
     np.testing.assert_allclose(el, [10.0, 10.0], atol=1e-9)
-    angle = np.degrees(np.arccos(np.clip(boresight @ np.array(SUN["inertial_dir"]), -1, 1)))
+    angle = np.degrees(np.arccos(np.clip(boresight @ np.array(SUN.inertial_dir), -1, 1)))
     np.testing.assert_allclose(angle, sol.dense.columns["keep_out_sun_deg"], atol=1e-9)
     # yaw by +90 deg about z: body +x points along inertial +y
     np.testing.assert_allclose(inertial_axis([0, 0, np.sin(np.pi / 4), np.cos(np.pi / 4)], [1, 0, 0]),

@@ -6,6 +6,7 @@ No solves here: the tables are rendered from synthetic results (the end-to-end G
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,8 @@ import pytest
 from convexguid.api import solve
 from convexguid.cli import main
 from convexguid.errors import SpecError
+from convexguid.families import get_family
+from convexguid.families.quaternion_attitude.figures import ConeGeometry
 from convexguid.report import comparisons
 from convexguid.report.comparisons import TABLES, check_comparisons, comparison_sections
 from convexguid.report.validation import CaseResult, link_overrides, run_order
@@ -27,12 +30,15 @@ GUO = [PROBLEMS / f"guo2011_{n}.yaml" for n in ("adaptive", "scp_time", "scp_ene
 GUO_ENERGY = GUO[2]
 
 
-def _solution(spec, wall_time_s=1.0, checks=(), **extras) -> Solution:
+def _solution(spec, wall_time_s=1.0, checks=(), **figures) -> Solution:
+    """A synthetic result carrying ``figures`` (figures of the family's type not given are None)."""
     verification = Verification(grid_points=100, checks=tuple(checks), final_state_error=0.0, final_errors={},
                                 passed=True)
+    kind = get_family(spec.family).figures
+    unset = {f.name: None for f in dataclasses.fields(kind) if f.default is dataclasses.MISSING}
     return Solution(problem=spec.name, family=spec.family, method=spec.method, status="converged", objective=0.0,
                     iterations=1, size=ProgramSize(1, 0, 0), wall_time_s=wall_time_s, solver="test",
-                    verification=verification, extras=extras)
+                    verification=verification, figures=kind(**{**unset, **figures}))
 
 
 def _result(spec, sol) -> CaseResult:
@@ -163,10 +169,9 @@ def test_link_overrides_pass_the_figure_in():
 def _multicone_results(order=(0, 1, 2)):
     pt, tm, en = (load_problem(p) for p in MULTICONE)
     clearance = {"eigenaxis_min_angle_deg": {"body1": 0.093, "body2": 0.02, "body3": 21.191, "body4": 42.602},
-                 "cones": [{"name": "body1", "half_angle_deg": 20.0, "keep_out": True},
-                           {"name": "body2", "half_angle_deg": 15.0, "keep_out": True},
-                           {"name": "body3", "half_angle_deg": 12.0, "keep_out": True},
-                           {"name": "body4", "half_angle_deg": 20.0, "keep_out": True}]}
+                 "cones": tuple(ConeGeometry(name, (0.0, 0.0, 1.0), (1.0, 0.0, 0.0), half_angle, True)
+                                for name, half_angle in (("body1", 20.0), ("body2", 15.0), ("body3", 12.0),
+                                                         ("body4", 20.0)))}
     results = [_result(pt, _solution(pt, wall_time_s=9.0, maneuver_time_s=113.0, planning_time_s=0.2,
                                      min_cone_margin_deg=4.562, energy=0.6043, **clearance)),
                _result(tm, _solution(tm, wall_time_s=4.0, maneuver_time_s=43.152, min_cone_margin_deg=0.022,
@@ -206,8 +211,8 @@ def test_forbidden_attitude_table_uses_the_rows_figures():
     en = load_problem(GUO_ENERGY, ["boundary.tf_from=null", "boundary.tf_s=196.8"])
     forbidden = ConstraintCheck("forbidden_guo_forbidden_deg", 10.04, 10.0, "min")
     results = [
-        _result(ctrl, _solution(ctrl, wall_time_s=0.77, maneuver_time_01deg_s=196.8, maneuver_time_s=260.0,
-                                energy_N2m2s=11.52, min_theta_b_deg=23.52)),
+        _result(ctrl, _solution(ctrl, wall_time_s=0.77, maneuver_time_01deg_s=196.8, energy_N2m2s=11.52,
+                                min_theta_b_deg=23.52)),
         _result(en, _solution(en, wall_time_s=6.5, checks=[forbidden], maneuver_time_s=196.8, energy=1.818)),
         _result(tm, _solution(tm, wall_time_s=6.0, checks=[forbidden], maneuver_time_s=85.32, energy=60.61))]
     lines = comparison_sections(results)

@@ -70,18 +70,18 @@ def test_minimum_time_plan_is_verified_and_meets_every_cone():
         assert check.worst >= check.bound
     assert names["rate_degps"].worst <= 3.0 + 1e-9
     assert names["torque_Nm"].worst <= 0.1 + 1e-9
-    assert sol.extras["min_cone_margin_deg"] >= 0
+    assert sol.figures.min_cone_margin_deg >= 0
     # the eigenaxis slew passes within a fraction of a degree of cones 1 and 2 (inside them)
-    eig = sol.extras["eigenaxis_min_angle_deg"]
+    eig = sol.figures.eigenaxis_min_angle_deg
     assert eig["body1"] < 20 and eig["body2"] < 15
 
 
 def test_energy_at_fixed_time_uses_less_energy_than_min_time():
     t_min = solve(GUO, ["discretization.intervals=16"])
     energy = solve(GUO, ["discretization.intervals=16", "objective=energy",
-                         f"boundary.tf_s={2 * t_min.extras['maneuver_time_s']}"])
+                         f"boundary.tf_s={2 * t_min.figures.maneuver_time_s}"])
     assert t_min.ok and energy.ok
-    assert energy.extras["energy"] < 0.5 * t_min.extras["energy"]
+    assert energy.figures.energy < 0.5 * t_min.figures.energy
     forbidden = [c for c in energy.verification.checks if c.name.startswith("forbidden")][0]
     assert forbidden.worst >= 10.0
 
@@ -144,7 +144,7 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
     coarse = ["discretization.intervals=16"]
     controller_spec = load_problem(PROBLEMS / "guo2011_adaptive.yaml")
     controller = solve(controller_spec)
-    tf = controller.extras["maneuver_time_01deg_s"]
+    tf = controller.figures.maneuver_time_01deg_s
     energy_file = PROBLEMS / "guo2011_scp_energy.yaml"
     linked = link_overrides(load_problem(energy_file), {controller_spec.name: controller})
     assert linked == ["boundary.tf_from=null", f"boundary.tf_s={float(tf)!r}"]
@@ -152,9 +152,9 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
     time_spec = load_problem(GUO, coarse)
     energy_plan, time_plan = solve(energy_spec), solve(time_spec)
     assert energy_plan.ok and time_plan.ok
-    assert energy_plan.extras["maneuver_time_s"] == pytest.approx(tf)
-    assert energy_plan.extras["energy"] < controller.extras["energy_N2m2s"]
-    assert time_plan.extras["maneuver_time_s"] < tf
+    assert energy_plan.figures.maneuver_time_s == pytest.approx(tf)
+    assert energy_plan.figures.energy < controller.figures.energy_N2m2s
+    assert time_plan.figures.maneuver_time_s < tf
     results = [CaseResult(spec, sol, (), ()) for spec, sol in
                ((controller_spec, controller), (time_spec, time_plan), (energy_spec, energy_plan))]
     lines = comparison_sections(results)
@@ -163,9 +163,9 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
         "| potential-function controller (Fig. 3 case, closed loop, disturbed)", "| SCP, minimum time",
         "| SCP, minimum energy at the controller's maneuver time"]
     assert rows[0].split(" | ")[1] == f"{tf:.2f}" == rows[2].split(" | ")[1]
-    assert rows[0].split(" | ")[2] == f"{controller.extras['energy_N2m2s']:.4g}"
-    assert rows[1].split(" | ")[1] == f"{time_plan.extras['maneuver_time_s']:.2f}"
-    saving = 100 * (1 - energy_plan.extras["energy"] / controller.extras["energy_N2m2s"])
+    assert rows[0].split(" | ")[2] == f"{controller.figures.energy_N2m2s:.4g}"
+    assert rows[1].split(" | ")[1] == f"{time_plan.figures.maneuver_time_s:.2f}"
+    saving = 100 * (1 - energy_plan.figures.energy / controller.figures.energy_N2m2s)
     table = "\n".join(lines)
     assert f"uses {saving:.1f}% less energy" in table
-    assert f"finishes in {time_plan.extras['maneuver_time_s']:.1f} s" in table
+    assert f"finishes in {time_plan.figures.maneuver_time_s:.1f} s" in table

@@ -173,8 +173,8 @@ def test_dense_verification_of_the_paper_plan(paper_solution):
 def test_lcvx_is_nearly_bang_off_bang(paper_case):
     plan = solve_lcvx(paper_case, 600)
     assert plan.status == "converged"
-    assert plan.extras["intermediate_throttle_share"] < 0.02
-    assert plan.extras["lossless_gap_max"] < 1e-6
+    assert plan.figures.intermediate_throttle_share < 0.02
+    assert plan.figures.lossless_gap_max < 1e-6
     assert len(plan.burns) == 2
 
 

@@ -3,8 +3,8 @@
 A family is one folder ``convexguid/families/<name>/`` whose ``__init__`` exports ``FAMILY``, a
 :class:`Family`. The registry (:mod:`convexguid.families`) lists them; the loader, the API, the
 command line and the report reach a family only through it. A family's ``__init__`` imports only
-its spec model at module level; ``solve``, ``plot`` and ``bench`` import the heavy modules (SCP,
-matplotlib, CasADi) when they are called.
+its spec model and its figures dataclass at module level; ``solve``, ``plot`` and ``bench`` import
+the heavy modules (SCP, matplotlib, CasADi) when they are called.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from convexguid.spec.common import ProblemBase
 if TYPE_CHECKING:
     from convexguid.scp.engine import IterationRecord
     from convexguid.scp.verified import PlanningSetup
-    from convexguid.solution import Solution
+    from convexguid.solution import Figures, Solution
 
 @dataclass(frozen=True)
 class Family:
@@ -41,10 +41,13 @@ class Family:
         (:func:`convexguid.report.plots.save_figure`); imports matplotlib only when called.
     verification_method : str
         How the solution is checked, as the report words it ("Dense verification (N points, <this>)").
+    figures : type of Figures
+        The dataclass (:class:`~convexguid.solution.Figures`) of the family's summary figures: its fields are the
+        figure names a problem file may name (``reference.comparison.figures``, ``boundary.tf_from.figure``).
     simulated : bool
         Run by ``convexguid simulate`` (a controller in closed loop) instead of planned by ``convexguid solve``.
     key_figures : tuple of (summary key, label)
-        Summary figures the validation report lists under each case of the family.
+        Summary figures the validation report lists under each case of the family (fields of ``figures``).
     planning_setup : callable or None
         ``planning_setup(spec) -> PlanningSetup`` (:mod:`convexguid.scp.verified`) for a planned family: how it
         builds the SCP program, with which settings, and its checker (dense verification and repairs). ``solve``
@@ -58,6 +61,7 @@ class Family:
     solve: Callable[[ProblemBase, Callable[[IterationRecord], None] | None], Solution]
     plot: Callable[[Solution, Path], list[Path]]
     verification_method: str
+    figures: type[Figures]
     simulated: bool = False
     key_figures: tuple[tuple[str, str], ...] = ()
     planning_setup: Callable[[ProblemBase], PlanningSetup] | None = None

@@ -5,9 +5,10 @@ A case joins a table through its problem file, ``reference.comparison: {table: <
 renders the results the validation run hands it: one row per case, ordered by role (baseline, minimum time,
 minimum energy, then the rest in the order of the results); the sentences
 under a table are computed from the rows present, found by their ``role`` (a sentence whose roles are missing
-is left out). A column shows a summary figure (or a figure computed from the solution); a row's
-``figures`` names the summary key standing for a column where the default does not apply (e.g. a simulated
-controller's maneuver time). Tables:
+is left out). A column shows a figure of the solution (:meth:`~convexguid.solution.Solution.figure`, n/a where
+the solution does not carry it) or a value computed from the solution; a row's ``figures`` names the figure
+standing for a column where the default does not apply (e.g. a simulated controller's maneuver time), checked
+against the fields of its family's figures type before anything is solved. Tables:
 
 * ``multicone`` (Wang, Xu, Li, Table 2 layout): maneuver time, planning time, smallest cone margin on the dense
   grid, energy, verified; roles ``baseline`` (the paper's planner) and ``min_time``.
@@ -23,13 +24,14 @@ from dataclasses import dataclass
 
 from convexguid.errors import SpecError
 from convexguid.families import get_family
+from convexguid.families.quaternion_attitude.figures import QuaternionAttitudeFigures
 from convexguid.solution import Solution
 from convexguid.spec import ProblemSpec
 
 
 @dataclass(frozen=True)
 class Column:
-    """One column: ``default`` gives the value from a solution unless the row's ``figures`` names a summary key."""
+    """One column: ``default`` gives the value from a solution unless the row's ``figures`` names a figure."""
 
     id: str
     header: str
@@ -58,8 +60,13 @@ class Table:
     notes: Callable[[dict[str, Row], list[Row]], list[str]]
 
 
-def _figure(key: str) -> Callable[[Solution], float | None]:
-    return lambda sol: _number(sol.summary().get(key))
+def _figure(name: str) -> Callable[[Solution], float | None]:
+    """The figure ``name`` of a solution as a number (None where the solution does not carry it)."""
+
+    def value(sol: Solution) -> float | None:
+        return _number(sol.figure(name)) if name in sol.figure_names() else None
+
+    return value
 
 
 def _number(value: object) -> float | None:
@@ -83,7 +90,7 @@ def _energy(fmt: str) -> Column:
 
 
 def _compute_time(header: str, fmt: str) -> Column:
-    return Column("compute_time", header, fmt, _figure("wall_time_s"))
+    return Column("compute_time", header, fmt, lambda sol: _number(sol.wall_time_s))
 
 
 def _multicone_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
@@ -96,9 +103,10 @@ def _multicone_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
         text.append(f"The SCP's minimum-time plan is {100 * cut:.1f}% shorter than the path-transfer plan and takes "
                     f"{ratio:.2f}x its planning time (the paper reports path transfer cutting the maneuver time by "
                     "about 85% and the planning time by about 33% against RDRP, which is not reimplemented here).")
-    clearance = next((r.solution.extras for r in rows if r.solution.extras.get("eigenaxis_min_angle_deg")), None)
+    clearance = next((r.solution.figures for r in rows if isinstance(r.solution.figures, QuaternionAttitudeFigures)
+                      and r.solution.figures.eigenaxis_min_angle_deg), None)
     if clearance is not None:
-        angles = clearance["eigenaxis_min_angle_deg"]
+        angles = clearance.eigenaxis_min_angle_deg
         text.append("The eigenaxis slew passes this close to each cone's direction: "
                     + ", ".join(f"{k} {v:.3f} deg" for k, v in angles.items()) + _broken_cones(clearance) + ".")
     text.append("Margins are measured on the dense SciPy re-propagation.")
@@ -106,11 +114,11 @@ def _multicone_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
             "Compute times are single runs of `convexguid validate`; `convexguid bench` repeats them against IPOPT."]
 
 
-def _broken_cones(extras: dict) -> str:
+def _broken_cones(figures: QuaternionAttitudeFigures) -> str:
     """``; cones 1 and 2 (20 and 15 deg half-angles) are broken``: keep-out cones the eigenaxis slew enters."""
-    angles, cones = extras["eigenaxis_min_angle_deg"], extras.get("cones") or []
-    broken = [(i, c["half_angle_deg"]) for i, c in enumerate(cones, 1)
-              if c.get("keep_out", True) and c["name"] in angles and angles[c["name"]] < c["half_angle_deg"]]
+    angles, cones = figures.eigenaxis_min_angle_deg, figures.cones
+    broken = [(i, c.half_angle_deg) for i, c in enumerate(cones, 1)
+              if c.keep_out and c.name in angles and angles[c.name] < c.half_angle_deg]
     if not cones:
         return ""
     if not broken:
@@ -165,8 +173,8 @@ def check_comparisons(specs: Sequence[ProblemSpec]) -> None:
     Raises
     ------
     SpecError
-        For an unknown table or column id, a summary figure the row's family does not list among its key
-        figures (families that list none are not checked), or two rows of a table with the same role or label.
+        For an unknown table or column id, a figure that is not a field of the row's family's figures type
+        (:attr:`~convexguid.families.base.Family.figures`), or two rows of a table with the same role or label.
     """
     seen: dict[tuple[str, str, str], str] = {}
     for spec in specs:
@@ -178,12 +186,12 @@ def check_comparisons(specs: Sequence[ProblemSpec]) -> None:
         if table is None:
             raise SpecError(f"{where}.table: unknown table (got {entry.table!r}); known tables: {', '.join(TABLES)}")
         columns = [c.id for c in table.columns]
-        known = {key for key, _ in get_family(spec.family).key_figures}
+        known = get_family(spec.family).figures.names()
         for column, figure in (entry.figures or {}).items():
             if column not in columns:
                 raise SpecError(f"{where}.figures.{column}: not a column of table {entry.table!r} "
                                 f"(got {column!r}); its columns: {', '.join(columns)}")
-            if known and figure not in known:
+            if figure not in known:
                 raise SpecError(f"{where}.figures.{column}: not a figure of family {spec.family!r} "
                                 f"(got {figure!r}); its figures: {', '.join(sorted(known))}")
         for what, value in (("role", entry.role), ("label", entry.label)):

@@ -92,8 +92,8 @@ def run_order(specs: Sequence[ProblemSpec]) -> list[int]:
     ------
     SpecError
         If a link names a problem that is not among ``specs`` (or is the case itself, or is named by two
-        cases), a figure that the named problem's family does not list among its key figures (families
-        that list none are not checked), or the links form a cycle.
+        cases), a figure that is not a field of the named problem's family's figures type, or the links
+        form a cycle.
     """
     index: dict[str, int] = {}
     for i, spec in enumerate(specs):
@@ -108,8 +108,8 @@ def run_order(specs: Sequence[ProblemSpec]) -> list[int]:
             if link.problem not in index or link.problem == spec.name:
                 raise SpecError(f"{where}: not another case of this validation run (got {link.problem!r}); "
                                 f"name one of: {', '.join(n for n in index if n != spec.name)}")
-            known = {key for key, _ in get_family(specs[index[link.problem]].family).key_figures}
-            if known and link.figure not in known:
+            known = get_family(specs[index[link.problem]].family).figures.names()
+            if link.figure not in known:
                 raise SpecError(f"{spec.source}: {link_key}.figure: not a figure of {link.problem!r} "
                                 f"(got {link.figure!r}); its figures: {', '.join(sorted(known))}")
             deps.add(index[link.problem])
@@ -130,7 +130,7 @@ def link_overrides(spec: ProblemSpec, solved: dict[str, Solution]) -> list[str]:
     """Overrides that resolve ``spec``'s input links from the solutions of the cases they name, by name.
 
     Each link ``<link_key>: {problem, figure}`` giving ``<key>`` becomes ``<link_key>=null`` and
-    ``<key>=<the figure of that problem's summary>``.
+    ``<key>=<that problem's figure>`` (:meth:`~convexguid.solution.Solution.figure`).
 
     Raises
     ------
@@ -140,7 +140,8 @@ def link_overrides(spec: ProblemSpec, solved: dict[str, Solution]) -> list[str]:
     """
     overrides = []
     for key, link_key, link in spec.input_links():
-        value = solved[link.problem].summary().get(link.figure)
+        linked = solved[link.problem]
+        value = linked.figure(link.figure) if link.figure in linked.figure_names() else None
         if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
             raise SpecError(f"{spec.source}: {link_key}: the result of {link.problem!r} has no finite "
                             f"{link.figure} (got {value!r}); fix that case, or set {key} in this file")
@@ -227,8 +228,8 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
     else:
         lines += ["", f"Status `{sol.status}` ({sol.message}); {sol.method} with `{sol.solver}`, "
                   f"{sol.iterations} steps; wall time {sol.wall_time_s:.3f} s."]
-    summary, family = sol.summary(), get_family(sol.family)
-    figures = [(label, summary[key]) for key, label in family.key_figures if key in summary]
+    family, carried = get_family(sol.family), sol.figure_names()
+    figures = [(label, sol.figure(key)) for key, label in family.key_figures if key in carried]
     if figures:
         lines += ["", "| figure | value |", "|---|---|"]
         lines += [f"| {label} | {_fmt_any(value)} |" for label, value in figures]

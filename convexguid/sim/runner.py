@@ -16,9 +16,11 @@ simulated too (a case equal to the base case reuses its run). The result is pack
   :math:`\theta_b`, bound :math:`\theta_m`; with a forbidden attitude), each also for every sweep case under
   the prefix ``sweep_theta_m_<angle>_``. ``passed`` when no check is violated by more than
   :data:`CONSTRAINT_TOL` times its bound and every run reaches the command.
-* extras: ``maneuver_time_1deg_s``, ``maneuver_time_01deg_s``, ``min_theta_b_deg``, ``theta_m_deg``,
+* ``figures``: a :class:`~convexguid.families.potential_function.figures.PotentialFunctionFigures` with
+  ``maneuver_time_1deg_s``, ``maneuver_time_01deg_s``, ``min_theta_b_deg``, ``theta_m_deg``,
   ``max_abs_torque_Nm``, ``energy_N2m2s``, ``final_error_deg`` and a few more (see :func:`_figures`) of the
-  base run, and ``sweep``: one dict of the same figures per sweep case.
+  base run, and ``sweep`` (with a ``sweep`` section): the same figures per sweep case, with ``reached`` and
+  ``passed``.
 
 References
 ----------
@@ -36,6 +38,7 @@ import numpy as np
 
 from convexguid.control.potential_function import PotentialFunctionController
 from convexguid.errors import SpecError
+from convexguid.families.potential_function.figures import PotentialFunctionFigures, SweepCaseFigures
 from convexguid.families.potential_function.spec import PotentialFunctionProblem
 from convexguid.rotations import quat_angle_between
 from convexguid.scp.problem import ProgramSize
@@ -47,7 +50,7 @@ from convexguid.sim.reaction_wheel import (
     no_disturbance,
     simulate,
 )
-from convexguid.solution import Solution, Trajectory, _finite
+from convexguid.solution import Solution, Trajectory, _finite, make_solution
 from convexguid.verify import ConstraintCheck, Verification
 
 ARRIVAL_TOL_DEG = 0.1
@@ -120,7 +123,7 @@ def _max_rate_degps(result: SimulationResult) -> float:
 
 
 def _figures(run: CaseRun) -> dict[str, float | None]:
-    """Summary figures of one run (keys of the summary JSON)."""
+    """Summary figures of one run, by field of :class:`~convexguid.families.potential_function.figures.RunFigures`."""
     m, r = run.metrics, run.result
     return {
         "theta_m_deg": run.theta_m_deg,
@@ -204,7 +207,7 @@ def simulate_problem(spec: PotentialFunctionProblem) -> Solution:
     Returns
     -------
     Solution
-        Family and method ``potential_function``; status, verification and extras as described in the module
+        Family and method ``potential_function``; status, verification and figures as described in the module
         docstring.
 
     Raises
@@ -221,13 +224,13 @@ def simulate_problem(spec: PotentialFunctionProblem) -> Solution:
     sweep = [base if math.isclose(m, theta_m) and math.isclose(o, theta_0) else run_case(spec, m, o)
              for m, o in sweep_cases]
     wall = time.perf_counter() - start
-    extras: dict = _figures(base)
+    cases = None
     if spec.sweep is not None:
-        extras["sweep"] = [{**_figures(case), "reached": case.reached, "passed": case.passed} for case in sweep]
+        cases = tuple(SweepCaseFigures(**_figures(case), reached=case.reached, passed=case.passed) for case in sweep)
     reached = base.reached and all(case.reached for case in sweep)
-    return Solution(
-        problem=spec.name, family=spec.family, method=spec.method,
-        status="converged" if reached else "max_iterations", objective=base.metrics.energy,
-        iterations=int(base.result.t.size - 1), size=ProgramSize(0, 0, 0), wall_time_s=wall, solver="rk4",
-        message=_message(spec, base, sweep), verification=_verification(spec, base, sweep),
-        dense=_dense(base, sweep), extras=extras, timing={"simulate_s": wall})
+    return make_solution(
+        spec, status="converged" if reached else "max_iterations", message=_message(spec, base, sweep),
+        started=start, objective=base.metrics.energy, iterations=int(base.result.t.size - 1),
+        size=ProgramSize(0, 0, 0), solver="rk4", verification=_verification(spec, base, sweep),
+        dense=_dense(base, sweep), figures=PotentialFunctionFigures(**_figures(base), sweep=cases),
+        timing={"simulate_s": wall})

@@ -15,6 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from convexguid.families.flat_attitude.figures import FlatAttitudeFigures
 from convexguid.families.flat_attitude.program import (
     FlatAttitudeProblem,
     FlatAttitudeProgram,
@@ -171,11 +172,13 @@ def solve_flat_attitude(spec, log: Callable[[IterationRecord], None] | None = No
     start = time.perf_counter()
     outcome = planning_setup(spec).solve(log)
     problem, x = outcome.program.problem, outcome.x
-    extras = {"energy": outcome.result.objective, "max_torque_Nm": float(np.abs(problem.torques(x)).max()),
-              "map_alpha": problem.grid.alpha, "max_constraint_violation_nodes": outcome.result.max_violation,
-              "min_separation_deg": None}
     dense = outcome.check.track if outcome.check is not None else None
+    separation = None
     if dense is not None and problem.cones:
-        extras["min_separation_deg"] = min(float(dense.columns[f"keep_out_{c.name}_deg"].min()) for c in problem.cones)
+        separation = min(float(dense.columns[f"keep_out_{c.name}_deg"].min()) for c in problem.cones)
+    figures = FlatAttitudeFigures(
+        energy=outcome.result.objective, max_torque_Nm=float(np.abs(problem.torques(x)).max()),
+        map_alpha=problem.grid.alpha, max_constraint_violation_nodes=outcome.result.max_violation,
+        min_separation_deg=separation)
     return planned_solution(spec, outcome, start, outcome.program.size(), nodes=node_table(problem, x), dense=dense,
-                            extras=extras)
+                            figures=figures)

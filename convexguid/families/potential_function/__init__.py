@@ -1,12 +1,14 @@
 """Family ``potential_function``: closed-loop slew with forbidden-attitude avoidance (Guo, Li, Ma 2011).
 
 Simulated, not planned: ``convexguid simulate`` runs the controller (:mod:`convexguid.control.potential_function`)
-on the reaction-wheel plant (:mod:`convexguid.sim`). Modules here: ``spec`` (problem file) and ``plots``.
+on the reaction-wheel plant (:mod:`convexguid.sim`). Modules here: ``spec`` (problem
+file), ``figures`` (summary figures of the simulation) and ``plots``.
 """
 
 from __future__ import annotations
 
 from convexguid.families.base import Family, lazy
+from convexguid.families.potential_function.figures import PotentialFunctionFigures
 from convexguid.families.potential_function.spec import PotentialFunctionProblem
 
 
@@ -23,6 +25,7 @@ FAMILY = Family(
     solve=_solve,
     plot=lazy("convexguid.families.potential_function.plots:plot_potential_function"),
     verification_method="closed-loop simulation",
+    figures=PotentialFunctionFigures,
     simulated=True,
     key_figures=(
         ("maneuver_time_1deg_s", "time to within 1 deg of the command, s"),

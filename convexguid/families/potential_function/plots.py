@@ -48,7 +48,7 @@ def _theta_b(solution: Solution, out_dir: Path, save: Save) -> Path:
     dense = solution.dense
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
     ax.plot(dense.t, dense.columns["theta_b_deg"], color="C0", lw=1.3, label="theta_b")
-    ax.axhline(solution.extras["theta_m_deg"], color="r", ls="--", lw=0.9, label="theta_m")
+    ax.axhline(solution.figures.theta_m_deg, color="r", ls="--", lw=0.9, label="theta_m")
     return save(fig, ax, f"{solution.problem}: angle to the forbidden attitude", "theta_b [deg]",
                 out_dir / "theta_b.png")
 
@@ -66,10 +66,10 @@ def _attitude_error(solution: Solution, out_dir: Path, save: Save) -> Path:
 def _sweep(solution: Solution, out_dir: Path, save: Save) -> Path:
     dense = solution.dense
     fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
-    cases = solution.extras["sweep"]
+    cases = solution.figures.sweep
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(cases)))
     for case, color in zip(cases, colors, strict=True):
-        theta_m = case["theta_m_deg"]
+        theta_m = case.theta_m_deg
         ax.plot(dense.t, dense.columns[sweep_column(theta_m)], color=color, lw=1.2, label=f"theta_m = {theta_m:g}")
         ax.axhline(theta_m, color=color, ls="--", lw=0.7)
     return save(fig, ax, f"{solution.problem}: theta_b for each theta_m (dashed: theta_m)", "theta_b [deg]",
@@ -82,7 +82,8 @@ def plot_potential_function(solution: Solution, out_dir: Path, save: Save) -> li
     Parameters
     ----------
     solution : Solution
-        Result of :func:`convexguid.sim.runner.simulate_problem`.
+        Result of :func:`convexguid.sim.runner.simulate_problem` (its figures a
+        :class:`~convexguid.families.potential_function.figures.PotentialFunctionFigures`).
     out_dir : Path
         Directory for the PNG files.
     save : callable
@@ -105,6 +106,6 @@ def plot_potential_function(solution: Solution, out_dir: Path, save: Save) -> li
     ]
     if "theta_b_deg" in solution.dense.columns:
         paths.append(_theta_b(solution, out_dir, save))
-    if solution.extras.get("sweep"):
+    if solution.figures is not None and solution.figures.sweep:
         paths.append(_sweep(solution, out_dir, save))
     return paths

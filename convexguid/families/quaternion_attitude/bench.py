@@ -158,8 +158,8 @@ def _scp_row(spec, objective: str, repeat: int) -> tuple[AttitudeBenchRow, Solut
     except Exception as exc:  # noqa: BLE001 - report and go on
         return _failed(K, _SCP, objective, exc), None
     ok = sol.status == "converged"
-    tf = sol.extras.get("maneuver_time_s")
-    margin = sol.extras.get("node_constraint_margin_deg")
+    tf = sol.figures.maneuver_time_s
+    margin = sol.figures.node_constraint_margin_deg
     row = AttitudeBenchRow(K, _SCP, objective, sol.status, tf_s=tf if ok else None,
                            energy=sol.objective if ok and objective == "energy" else None, iterations=sol.iterations,
                            wall_s=sol.wall_time_s, scp_s=sol.timing.get("scp_s"), solver_s=sol.timing.get("solver_s"),

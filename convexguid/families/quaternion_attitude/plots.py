@@ -9,15 +9,14 @@ r"""Plots of a ``quaternion_attitude`` solution, after Wang, Xu, Li (seed 003) F
 * ``quaternion.png``, ``torques.png``, ``body_rates.png`` (Figs. 3-5): dense histories, node values as open
   circles, :math:`\pm` the bounds of the verification checks ``torque_Nm`` and ``rate_degps``.
 * ``cone_angles.png``: the dense ``keep_out_<name>_deg`` / ``keep_in_<name>_deg`` columns with each
-  half-angle dashed in the same colour (and, dotted, ``extras["eigenaxis_min_angle_deg"]`` when present);
+  half-angle dashed in the same colour (and, dotted, the figure ``eigenaxis_min_angle_deg`` when present);
   ``forbidden_angles.png`` likewise for ``forbidden_<name>_deg`` columns and their verification bounds.
 
 The body axis :math:`b` of a body-relative-to-inertial quaternion q points along
 :math:`C_{BI}(q)^T b = C_{IB}(q)\,b` in inertial axes (``quat_rotate(quat_conjugate(q), b)``). The cone
-geometry comes from ``solution.extras["cones"]``: a list of ``{"name", "body_axis", "inertial_dir",
-"half_angle_deg", "keep_out"}`` (:meth:`convexguid.geometry.PointingCone.to_dict`, read back from the summary
-JSON as written, so the limits drawn are the summary's numbers); without it only the time histories and
-angle plots are drawn.
+geometry comes from the figure ``cones`` (a tuple of
+:class:`~convexguid.families.quaternion_attitude.figures.ConeGeometry`, the numbers the summary JSON writes, so
+the limits drawn are the summary's); without cones only the time histories and angle plots are drawn.
 """
 
 from __future__ import annotations
@@ -84,10 +83,11 @@ def _unit(v: ArrayLike) -> NDArray:
 
 
 def sky_cones(solution: Solution) -> list[SkyCone]:
-    """Cones of ``solution.extras["cones"]`` (empty list without the key), coloured by their position."""
-    return [SkyCone(str(c["name"]), _unit(c["body_axis"]), _unit(c["inertial_dir"]), float(c["half_angle_deg"]),
-                    bool(c["keep_out"]), CONE_COLORS[i % len(CONE_COLORS)])
-            for i, c in enumerate(solution.extras.get("cones") or [])]
+    """Cones of the figure ``cones`` (empty list without figures), coloured by their position."""
+    cones = solution.figures.cones if solution.figures is not None else ()
+    return [SkyCone(str(c.name), _unit(c.body_axis), _unit(c.inertial_dir), float(c.half_angle_deg),
+                    bool(c.keep_out), CONE_COLORS[i % len(CONE_COLORS)])
+            for i, c in enumerate(cones)]
 
 
 def inertial_axis(q: ArrayLike, body_axis: ArrayLike) -> NDArray:
@@ -310,7 +310,7 @@ def _angle_plot(solution: Solution, curves: Sequence[AngleCurve], stem: str, tit
 def cone_curves(solution: Solution, cones: Sequence[SkyCone]) -> list[AngleCurve]:
     """Curves of the dense ``keep_out_*`` / ``keep_in_*`` columns; limits from the cones, else from the checks."""
     known = {c.column: c for c in cones}
-    eigen = solution.extras.get("eigenaxis_min_angle_deg") or {}
+    eigen = (solution.figures.eigenaxis_min_angle_deg if solution.figures is not None else None) or {}
     curves = []
     for k, column in enumerate(c for c in solution.dense.columns if c.startswith(("keep_out_", "keep_in_"))):
         cone = known.get(column)
@@ -333,8 +333,9 @@ def plot_quaternion_attitude(solution: Solution, out_dir: Path, save: Save) -> l
     Parameters
     ----------
     solution : Solution
-        Dense columns ``q1..q4``, ``omega{i}_degps``, ``u{i}_Nm`` and the cone angle columns; optional nodes,
-        ``extras["cones"]`` and ``extras["eigenaxis_min_angle_deg"]``.
+        Dense columns ``q1..q4``, ``omega{i}_degps``, ``u{i}_Nm`` and the cone angle columns; optional nodes and
+        figures (:class:`~convexguid.families.quaternion_attitude.figures.QuaternionAttitudeFigures`: ``cones``,
+        ``eigenaxis_min_angle_deg``).
     out_dir : Path
         Directory for the PNG files.
     save : callable

@@ -16,6 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from convexguid.families.quaternion_attitude.figures import ConeGeometry, QuaternionAttitudeFigures
 from convexguid.families.quaternion_attitude.program import (
     AttitudeCase,
     Forbidden,
@@ -29,7 +30,7 @@ from convexguid.rotations import quat_angle_between, quat_sign_continuous
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.scp.state import IterationRecord
 from convexguid.scp.verified import Check, PlanningSetup, Repair, grown_margin
-from convexguid.solution import Solution, Trajectory, planned_solution
+from convexguid.solution import Solution, Trajectory, make_solution, planned_solution
 from convexguid.verify import (
     AttitudeTrack,
     ConstraintCheck,
@@ -200,55 +201,55 @@ def eigenaxis_cone_clearance(case: AttitudeCase, samples: int = 721) -> dict[str
     return {c.name: float(c.angles_deg(q).min()) for c in case.cones if c.keep_out}
 
 
-def cone_geometry(case: AttitudeCase) -> list[dict]:
+def cone_geometry(case: AttitudeCase) -> tuple[ConeGeometry, ...]:
     """The cones as plain data for the summary and the sky plots."""
-    return [c.to_dict() for c in case.cones]
+    return tuple(ConeGeometry.of(c) for c in case.cones)
 
 
 def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
     """Plan with ``spec.method`` (``scp`` or ``path_transfer``), verify, and summarise."""
     start = time.perf_counter()
     case = build_case(spec)
-    extras: dict = {"eigenaxis_min_angle_deg": eigenaxis_cone_clearance(case), "cones": cone_geometry(case)}
+    figures = QuaternionAttitudeFigures(eigenaxis_min_angle_deg=eigenaxis_cone_clearance(case),
+                                        cones=cone_geometry(case))
     if spec.method == "path_transfer":
-        return _solve_path_transfer(case, spec, start, extras)
+        return _solve_path_transfer(case, spec, start, figures)
     if spec.objective == "energy" and case.tf is None:
         timed = planning_setup(spec, case).solve()
         if timed.result.status != "converged":
             timed.message = "minimum time (which sets the energy problem's final time) did not converge: " \
                 + timed.message
-            return planned_solution(spec, timed, start, timed.program.size(), extras=extras)
-        extras["min_time_s"] = timed.program.final_time(timed.x)
-        case = replace(case, tf=spec.boundary.tf_min_time_factor * extras["min_time_s"])
+            return planned_solution(spec, timed, start, timed.program.size(), figures=figures)
+        figures = replace(figures, min_time_s=timed.program.final_time(timed.x))
+        case = replace(case, tf=spec.boundary.tf_min_time_factor * figures.min_time_s)
     outcome = planning_setup(spec, case).solve(log)
     program, x = outcome.program, outcome.x
     tf = program.final_time(x)
     nodes = program.nodes(x)
     node_cols = _state_columns(nodes[:, :4], nodes[:, 4:7], nodes[:, 7:])
-    extras.update({"maneuver_time_s": tf, "node_constraint_margin_deg": float(np.degrees(program.margin)),
-                   "max_quaternion_norm_error": float(np.abs(np.linalg.norm(nodes[:, :4], axis=1) - 1).max()),
-                   "interval_s": tf / program.K, "initial_guess": spec.initial_guess, "objective_kind": spec.objective})
+    figures = replace(figures, maneuver_time_s=tf, node_constraint_margin_deg=float(np.degrees(program.margin)),
+                      max_quaternion_norm_error=float(np.abs(np.linalg.norm(nodes[:, :4], axis=1) - 1).max()),
+                      interval_s=tf / program.K, initial_guess=spec.initial_guess, objective_kind=spec.objective)
     dense = None
     if outcome.check is not None:
         track = outcome.check.track
-        extras.update({"energy": _energy(track), "min_cone_margin_deg": cone_margin_deg(case, track)})
+        figures = replace(figures, energy=_energy(track), min_cone_margin_deg=cone_margin_deg(case, track))
         dense = Trajectory(track.t, _dense_columns(case, track))
     return planned_solution(spec, outcome, start, program.size(), nodes=Trajectory(program.times(x), node_cols),
-                            dense=dense, extras=extras)
+                            dense=dense, figures=figures)
 
 
-def _solve_path_transfer(case: AttitudeCase, spec, start: float, extras: dict) -> Solution:
+def _solve_path_transfer(case: AttitudeCase, spec, start: float, figures: QuaternionAttitudeFigures) -> Solution:
     plan = plan_path_transfer(path_transfer_problem(case))
     breaks = plan.breakpoints_s
     step = float(np.min(np.diff(breaks))) / 4 if breaks.size > 1 else plan.maneuver_time_s / 200
     verification, track = verify_plan(case, case.t0 + plan.maneuver_time_s, plan.torque_at, spec.verification,
                                       max_step=max(step, 1e-3))
-    extras.update({"maneuver_time_s": plan.maneuver_time_s, "planning_time_s": plan.planning_time_s,
-                   "energy": _energy(track), "min_cone_margin_deg": cone_margin_deg(case, track),
-                   "actions": [f"{case.cones[i].name}: {a}" for i, a in enumerate(plan.actions)]})
-    return Solution(problem=spec.name, family=spec.family, method=spec.method, status="converged",
-                    objective=plan.maneuver_time_s, iterations=0, size=ProgramSize(0, 0, 0),
-                    wall_time_s=time.perf_counter() - start, solver="path_transfer",
-                    message=f"{len(plan.waypoints)} way-points", verification=verification,
-                    dense=Trajectory(track.t, _dense_columns(case, track)), extras=extras,
-                    timing={"planning_s": plan.planning_time_s})
+    figures = replace(figures, maneuver_time_s=plan.maneuver_time_s, planning_time_s=plan.planning_time_s,
+                      energy=_energy(track), min_cone_margin_deg=cone_margin_deg(case, track),
+                      actions=tuple(f"{case.cones[i].name}: {a}" for i, a in enumerate(plan.actions)))
+    return make_solution(spec, status="converged", message=f"{len(plan.waypoints)} way-points", started=start,
+                         objective=plan.maneuver_time_s, iterations=0, size=ProgramSize(0, 0, 0),
+                         solver="path_transfer", verification=verification,
+                         dense=Trajectory(track.t, _dense_columns(case, track)), figures=figures,
+                         timing={"planning_s": plan.planning_time_s})

@@ -30,6 +30,7 @@ from scipy.integrate import solve_ivp
 
 from convexguid.dynamics.clohessy_wiltshire import cw_matrices
 from convexguid.errors import SolverError
+from convexguid.families.rendezvous.figures import ArcsPlanFigures, LcvxPlanFigures
 from convexguid.scp.engine import IterationRecord
 from convexguid.solution import Trajectory
 from convexguid.verify import ConstraintCheck, Verification
@@ -228,5 +229,5 @@ class RendezvousPlan:
     thrust: ThrustPlan
     nodes: Trajectory
     timing: dict[str, float]
-    extras: dict
+    figures: ArcsPlanFigures | LcvxPlanFigures
     history: list[IterationRecord]

@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from convexguid.backends import Cones, ConicProgram, make_backend
 from convexguid.dynamics.clohessy_wiltshire import cw_zoh
 from convexguid.families.rendezvous.case import BurnArc, Rendezvous, RendezvousPlan, ThrustPlan, state_columns
+from convexguid.families.rendezvous.figures import LcvxPlanFigures
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Trajectory
 
@@ -112,7 +113,7 @@ def solve_lcvx(case: Rendezvous, steps: int, backend: str = "clarabel") -> Rende
                    else f"backend {backend} returned {res.status}")
         empty = Trajectory(grid, {})
         return RendezvousPlan(status, message, float("nan"), res.iterations, size, (), ThrustPlan((), nu), empty,
-                              timing, {"solver_iterations": res.iterations}, [])
+                              timing, LcvxPlanFigures(solver_iterations=res.iterations), [])
     z = res.x.reshape(steps, width)
     u, throttle = z[:, :nu], z[:, nu]
     states = np.empty((steps + 1, case.nx))
@@ -121,17 +122,17 @@ def solve_lcvx(case: Rendezvous, steps: int, backend: str = "clarabel") -> Rende
         states[k + 1] = phi @ states[k] + gam @ u[k]
     intermediate = (throttle > ON_THRESHOLD) & (throttle < 1 - ON_THRESHOLD)
     burning = throttle > ON_THRESHOLD
-    extras = {
-        "grid_steps": steps,
-        "solver_iterations": res.iterations,
-        "intermediate_throttle_share": float(intermediate.sum() / max(burning.sum(), 1)),
-        "intermediate_throttle_steps": int(intermediate.sum()),
-        "lossless_gap_max": float(np.max(throttle - np.linalg.norm(u, axis=1))),
-    }
+    figures = LcvxPlanFigures(
+        solver_iterations=res.iterations,
+        grid_steps=steps,
+        intermediate_throttle_share=float(intermediate.sum() / max(burning.sum(), 1)),
+        intermediate_throttle_steps=int(intermediate.sum()),
+        lossless_gap_max=float(np.max(throttle - np.linalg.norm(u, axis=1))),
+    )
     u_nodes = np.vstack([u, np.zeros(nu)])
     nodes = Trajectory(grid, {**state_columns(case.dim, states, u_nodes, case.accel),
                               "throttle": np.append(throttle, 0.0)})
     return RendezvousPlan("converged", "global optimum of the lossless convexification (one SOCP)",
                           float(throttle.sum() * case.duration / steps), res.iterations, size,
                           burn_structure(grid, throttle), ThrustPlan.from_steps(grid, u, threshold=1e-9), nodes,
-                          timing, extras, [])
+                          timing, figures, [])

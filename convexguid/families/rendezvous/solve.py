@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -22,11 +22,12 @@ from convexguid.families.rendezvous.case import (
     state_columns,
     verify_track,
 )
+from convexguid.families.rendezvous.figures import ArcsPlanFigures, LcvxCertificate, RendezvousFigures
 from convexguid.families.rendezvous.lcvx import solve_lcvx
 from convexguid.scp.problem import SCPSettings
 from convexguid.scp.state import IterationRecord
 from convexguid.scp.verified import Check, PlanningSetup, Repair
-from convexguid.solution import Solution, Trajectory
+from convexguid.solution import Solution, Trajectory, make_solution
 
 
 def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
@@ -49,20 +50,26 @@ def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None)
                              spec.verification.atol)
     verification = verify_track(case, track, spec.verification) if plan.status in ("converged", "unverified") \
         else None
-    extras = {"burn_time_s": plan.objective if plan.status == "converged" else None,
-              "num_burns": len(plan.burns),
-              "burn_arcs_s": [[b.start_s, b.end_s] for b in plan.burns],
-              "accel_mps2": case.accel, "mean_motion_radps": case.mean_motion}
-    extras.update(plan.extras)
-    if spec.method == "scp_arcs" and lcvx is not None:
-        extras.update(_certificate(plan, lcvx))
-    return Solution(
-        problem=spec.name, family=spec.family, method=spec.method, status=plan.status,
-        objective=plan.objective, iterations=plan.iterations, size=plan.size,
-        wall_time_s=time.perf_counter() - start, solver=spec.solver.backend, message=plan.message,
-        verification=verification, history=plan.history, nodes=plan.nodes,
-        dense=Trajectory(track.t, state_columns(case.dim, track.states, track.u, case.accel)),
-        extras=extras, timing=plan.timing, repair_rounds=rounds)
+    certificate = _certificate(plan, lcvx) if spec.method == "scp_arcs" and lcvx is not None else None
+    figures = RendezvousFigures(
+        burn_time_s=plan.objective if plan.status == "converged" else None, num_burns=len(plan.burns),
+        burn_arcs_s=_arcs(plan.burns), accel_mps2=case.accel, mean_motion_radps=case.mean_motion,
+        **_field_values(plan.figures), **(_field_values(certificate) if certificate is not None else {}))
+    return make_solution(
+        spec, status=plan.status, message=plan.message, started=start, objective=plan.objective,
+        iterations=plan.iterations, size=plan.size, verification=verification, history=plan.history,
+        nodes=plan.nodes, dense=Trajectory(track.t, state_columns(case.dim, track.states, track.u, case.accel)),
+        figures=figures, timing=plan.timing, repair_rounds=rounds)
+
+
+def _arcs(burns: tuple[BurnArc, ...]) -> tuple[tuple[float, float], ...]:
+    """The burns as ``(start, end)`` pairs, s."""
+    return tuple((b.start_s, b.end_s) for b in burns)
+
+
+def _field_values(figures) -> dict:
+    """The fields of a plan's figures or of the certificate, by name (they are fields of RendezvousFigures)."""
+    return {f.name: getattr(figures, f.name) for f in fields(figures)}
 
 
 class ArcsChecker:
@@ -116,10 +123,11 @@ def _solve_arcs(case: Rendezvous, spec, log) -> tuple[RendezvousPlan, list]:
     times = program.node_times(durations)
     nodes = Trajectory(times, state_columns(case.dim, states, dirs, case.accel))
     burns = program.burn_arcs(result.x)
-    extras = {"arc_durations_s": durations.tolist(), "subintervals_per_burn": program.layout.subintervals,
-              "planned_direction_norm_min": _interpolated_norm_min(times, dirs, burns)}
+    figures = ArcsPlanFigures(arc_durations_s=tuple(durations.tolist()),
+                              subintervals_per_burn=program.layout.subintervals,
+                              planned_direction_norm_min=_interpolated_norm_min(times, dirs, burns))
     plan = RendezvousPlan(outcome.status, outcome.message, result.objective, result.iterations, program.size(),
-                          burns, program.thrust_plan(result.x), nodes, result.timing(), extras, result.history)
+                          burns, program.thrust_plan(result.x), nodes, result.timing(), figures, result.history)
     return plan, outcome.rounds
 
 
@@ -130,10 +138,10 @@ def _interpolated_norm_min(times: np.ndarray, dirs: np.ndarray, burns: tuple[Bur
     return float(min((np.linalg.norm(u) for u in samples), default=1.0))
 
 
-def _certificate(arcs: RendezvousPlan, lcvx: RendezvousPlan) -> dict:
+def _certificate(arcs: RendezvousPlan, lcvx: RendezvousPlan) -> LcvxCertificate:
     """Gap of the ``scp_arcs`` burn time to the ``lcvx`` global optimum on the fixed grid."""
     if lcvx.status != "converged" or arcs.status != "converged":
-        return {"lcvx_status": lcvx.status, "lcvx_burn_time_s": None, "lcvx_gap_rel": None}
-    return {"lcvx_status": lcvx.status, "lcvx_burn_time_s": lcvx.objective,
-            "lcvx_gap_rel": (arcs.objective - lcvx.objective) / lcvx.objective,
-            "lcvx_burn_arcs_s": [[b.start_s, b.end_s] for b in lcvx.burns]}
+        return LcvxCertificate(lcvx_status=lcvx.status)
+    return LcvxCertificate(lcvx_status=lcvx.status, lcvx_burn_time_s=lcvx.objective,
+                           lcvx_gap_rel=(arcs.objective - lcvx.objective) / lcvx.objective,
+                           lcvx_burn_arcs_s=_arcs(lcvx.burns))
