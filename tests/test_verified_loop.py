@@ -111,3 +111,21 @@ def test_inconsistent_hard_constraints_are_certified_by_the_elastic_program():
                                                        "boundary.final.rate_degps=[1, 0, 0]"])
     assert sol.status == "infeasible"
     assert "certificate" in sol.message and "elastic" in sol.message
+
+
+def test_a_start_that_breaks_the_torque_box_is_restored_and_still_reaches_the_optimum():
+    """The same slew from an eigenaxis start squeezed into 0.8 x its time: 1.56x the torque box at the ends."""
+    from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_guess
+    from convexguid.families.quaternion_attitude.solve import planning_setup
+    from convexguid.scp.verified import PlanningSetup
+    from convexguid.spec import load_problem
+
+    setup = planning_setup(load_problem(PROBLEMS / "wang_multicone_time.yaml", SLEW_180))
+    program = setup.program
+    tf = 0.8 * program.final_time(program.initial_guess())
+    nodes = eigenaxis_guess(program.case, np.linspace(0.0, tf, program.K + 1))
+    squeezed = QuaternionProgram(program.case, program.K, nodes, tf)
+    assert np.abs(squeezed.nodes(squeezed.initial_guess())[:, 7:]).max() > 1.5  # the start breaks the 1 N m box
+    outcome = PlanningSetup(squeezed, setup.settings, setup.checker, setup.budget).solve()
+    assert outcome.status == "converged", outcome.message
+    assert outcome.program.final_time(outcome.x) == pytest.approx(BILIMORIA_WIE_TIME_S, rel=0.01)

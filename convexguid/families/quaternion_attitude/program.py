@@ -161,11 +161,16 @@ def eigenaxis_start(case: AttitudeCase, intervals: int) -> tuple[np.ndarray, flo
 
 
 def eigenaxis_time_guess(case: AttitudeCase) -> float:
-    """Duration of a rest-to-rest eigenaxis slew that roughly respects both boxes (a starting :math:`t_f`)."""
+    """Duration of a rest-to-rest eigenaxis slew that roughly respects both boxes (a starting :math:`t_f`).
+
+    The guess follows a cubic angle profile, whose peak acceleration :math:`6\\theta/T^2` is 1.5 times
+    that of bang-bang timing; :math:`T = \\sqrt{6\\theta/a}` keeps it at the torque box (gyroscopic terms
+    aside, which a principal-axis or symmetric body does not have).
+    """
     axis, angle = eigenaxis_rotation(case.q0, case.qf)
     accel = case.torque_max / max(np.abs(case.inertia @ axis).max(), 1e-12)
     rate = case.rate_max / max(np.abs(axis).max(), 1e-12)
-    return float(max(2 * np.sqrt(angle / accel), 1.5 * angle / rate, 1e-3))
+    return float(max(np.sqrt(6 * angle / accel), 1.5 * angle / rate, 1e-3))
 
 
 class QuaternionProgram:
