@@ -92,6 +92,30 @@ def propagate_attitude(inertia: np.ndarray, torque: Callable[[float], np.ndarray
     return AttitudeTrack(sol.t, q, sol.y[4:].T, np.array([torque(t) for t in sol.t]))
 
 
+TORQUE_AXIS_CHECKS = ("torque_x_Nm", "torque_y_Nm", "torque_z_Nm")
+"""Names of the per-axis torque checks, emitted when the three axis bounds differ."""
+
+
+def torque_box_checks(torque: np.ndarray, torque_max: float | Sequence[float] | np.ndarray
+                      ) -> tuple[ConstraintCheck, ...]:
+    """Checks of the torque box :math:`|u_i| \\le u_{max,i}` on rows of body torque ``torque`` (N m).
+
+    One check ``torque_Nm`` (the largest component against the bound) when ``torque_max`` is one number or
+    three equal ones; otherwise one check per axis, :data:`TORQUE_AXIS_CHECKS`, each against its own bound.
+    """
+    bounds = np.broadcast_to(np.asarray(torque_max, dtype=float), (3,))
+    if np.all(bounds == bounds[0]):
+        return (ConstraintCheck("torque_Nm", float(np.max(np.abs(torque))), float(bounds[0]), "max"),)
+    worst = np.max(np.abs(torque), axis=0)
+    return tuple(ConstraintCheck(name, float(w), float(b), "max")
+                 for name, w, b in zip(TORQUE_AXIS_CHECKS, worst, bounds, strict=True))
+
+
+def torque_checks(checks: Sequence[ConstraintCheck]) -> tuple[ConstraintCheck, ...]:
+    """The torque-box checks among ``checks``: ``torque_Nm``, or the per-axis ``torque_[xyz]_Nm``."""
+    return tuple(c for c in checks if c.name == "torque_Nm" or c.name in TORQUE_AXIS_CHECKS)
+
+
 def verify_attitude_track(track: AttitudeTrack, torque_max: float | np.ndarray,
                           cones: Sequence[PointingCone],
                           q_target: np.ndarray, omega_target: np.ndarray, constraint_tol: float,
@@ -100,11 +124,14 @@ def verify_attitude_track(track: AttitudeTrack, torque_max: float | np.ndarray,
     """Check torque box, keep-out cones (:class:`~convexguid.geometry.PointingCone`),
     optional rate box, and the final attitude and rate against the target.
 
+    ``torque_max`` is one bound for every body axis or three (x, y, z); see :func:`torque_box_checks`
+    for the check names.
+
     Path constraints pass when their violation is at most ``constraint_tol`` times
     the bound's magnitude. ``final_state_error`` is the Euclidean distance of
     (Euler-axis attitude error in rad, rate error in rad/s) from zero.
     """
-    checks = [ConstraintCheck("torque_Nm", float(np.max(np.abs(track.torque))), float(np.max(torque_max)), "max")]
+    checks = list(torque_box_checks(track.torque, torque_max))
     if rate_max is not None:
         checks.append(ConstraintCheck("rate_degps", float(np.degrees(np.max(np.abs(track.omega)))),
                                       float(np.degrees(rate_max)), "max"))

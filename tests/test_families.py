@@ -82,18 +82,18 @@ def test_solution_figure_by_summary_key():
 
 
 def test_names_in_registry_order():
-    assert family_names() == ("flat_attitude", "rendezvous", "quaternion_attitude", "potential_function")
-    assert [n for n, f in FAMILIES.items() if f.simulated] == ["potential_function"]
+    assert family_names() == ("flat_attitude", "rendezvous", "quaternion_attitude", "potential_function", "lpmpc")
+    assert [n for n, f in FAMILIES.items() if f.simulated] == ["potential_function", "lpmpc"]
 
 
 def test_unknown_family_lists_the_known_ones():
     with pytest.raises(SpecError, match="known families: flat_attitude, rendezvous, quaternion_attitude, "
-                                        "potential_function"):
+                                        "potential_function, lpmpc"):
         get_family("orbit_raising")
 
 
 def test_simulating_a_planned_family_names_the_simulated_ones():
-    with pytest.raises(SpecError, match=r"simulate handles: potential_function\)"):
+    with pytest.raises(SpecError, match=r"simulate handles: potential_function, lpmpc\)"):
         convexguid.simulate(f"{PROBLEMS}/cai2018_flat_attitude.yaml")
 
 

@@ -2,13 +2,14 @@
 
 Between checks the law flies the nominal torque. Every ``check_interval_s`` it predicts the terminal
 deviation from the target analytically: the nominal's own miss plus :math:`K_x \\delta x_0` (eq. 42,
-prediction method 1; the nominal's miss is zero until a correction leaves the linearization residual). Only if a component exceeds
-its threshold does it integrate the nonlinear model from the measured state under the nominal torque
-(method 2); if that trajectory still misses the target by more than the threshold, it becomes the new
-nominal and the energy-optimal correction of :mod:`convexguid.control.lpmpc` is added to the torque,
-interpolated between the LGR points (eq. 24) with :math:`\\delta u_0 = 0`. The corrected torque is then
-integrated once more, so that the nominal states and torques stay consistent for the next prediction
-(the paper keeps the state trajectory of the uncorrected torque).
+prediction method 1; the nominal's miss is zero until a correction leaves the linearization residual).
+Only if a component exceeds its threshold does it integrate the nonlinear model from the measured
+state under the nominal torque (method 2). If that trajectory still misses the target by more than the
+threshold, it becomes the new nominal and the energy-optimal correction of
+:mod:`convexguid.control.lpmpc` is added to the torque, interpolated between the LGR points (eq. 24)
+with :math:`\\delta u_0 = 0`. The corrected torque is then integrated once more, so that the nominal
+states and torques stay consistent for the next prediction (the paper keeps the state trajectory of the
+uncorrected torque).
 """
 
 from __future__ import annotations

@@ -66,12 +66,25 @@ def mrp_error_matrices(x: np.ndarray, inertia: np.ndarray, inertia_inv: np.ndarr
     return A, B
 
 
+def _derivative_1(x: np.ndarray, u: np.ndarray, inertia: np.ndarray, inertia_inv: np.ndarray) -> np.ndarray:
+    """:func:`mrp_state_derivative` of one real state, written out (the batched form costs ~25x more per call)."""
+    s1, s2, s3, w1, w2, w3 = x
+    sts, sw = s1 * s1 + s2 * s2 + s3 * s3, s1 * w1 + s2 * w2 + s3 * w3
+    a = 1.0 - sts
+    sigma_dot = (0.25 * (a * w1 + 2.0 * (s2 * w3 - s3 * w2) + 2.0 * s1 * sw),
+                 0.25 * (a * w2 + 2.0 * (s3 * w1 - s1 * w3) + 2.0 * s2 * sw),
+                 0.25 * (a * w3 + 2.0 * (s1 * w2 - s2 * w1) + 2.0 * s3 * sw))
+    h = inertia @ x[3:]
+    gyro = np.array([w2 * h[2] - w3 * h[1], w3 * h[0] - w1 * h[2], w1 * h[1] - w2 * h[0]])
+    return np.concatenate([sigma_dot, inertia_inv @ (u - gyro)])
+
+
 def rk4_step(x: np.ndarray, u: np.ndarray, dt: float, inertia: np.ndarray, inertia_inv: np.ndarray) -> np.ndarray:
-    """One classical Runge-Kutta step of length ``dt`` with the torque ``u`` held constant."""
-    k1 = mrp_state_derivative(x, u, inertia, inertia_inv)
-    k2 = mrp_state_derivative(x + 0.5 * dt * k1, u, inertia, inertia_inv)
-    k3 = mrp_state_derivative(x + 0.5 * dt * k2, u, inertia, inertia_inv)
-    k4 = mrp_state_derivative(x + dt * k3, u, inertia, inertia_inv)
+    """One classical Runge-Kutta step of length ``dt`` for one state, with the torque ``u`` held constant."""
+    k1 = _derivative_1(x, u, inertia, inertia_inv)
+    k2 = _derivative_1(x + 0.5 * dt * k1, u, inertia, inertia_inv)
+    k3 = _derivative_1(x + 0.5 * dt * k2, u, inertia, inertia_inv)
+    k4 = _derivative_1(x + dt * k3, u, inertia, inertia_inv)
     return x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
@@ -82,5 +95,8 @@ def shortest_mrp(sigma: np.ndarray) -> np.ndarray:
     is a small MRP error; this is the same rule in MRPs.
     """
     s = np.asarray(sigma, dtype=float)
+    if s.ndim == 1:
+        n2 = float(s @ s)
+        return -s / n2 if n2 > 1.0 else s
     n2 = np.sum(s * s, -1, keepdims=True)
     return np.where(n2 > 1.0, -s / np.where(n2 > 0, n2, 1.0), s)

@@ -8,7 +8,7 @@ Each family is a package ``convexguid/families/<name>/`` exporting ``FAMILY``
 from __future__ import annotations
 
 from convexguid.errors import SpecError
-from convexguid.families import flat_attitude, potential_function, quaternion_attitude, rendezvous
+from convexguid.families import flat_attitude, lpmpc, potential_function, quaternion_attitude, rendezvous
 from convexguid.families.base import Family
 
 FAMILIES: dict[str, Family] = {family.name: family for family in (
@@ -16,6 +16,7 @@ FAMILIES: dict[str, Family] = {family.name: family for family in (
     rendezvous.FAMILY,
     quaternion_attitude.FAMILY,
     potential_function.FAMILY,
+    lpmpc.FAMILY,
 )}
 """Every family, by the value of the problem file's ``family`` key."""
 

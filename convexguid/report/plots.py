@@ -18,11 +18,11 @@ def plot_solution(solution: Solution, out_dir: Path) -> list[Path]:
     return get_family(solution.family).plot(solution, out_dir, save_figure)
 
 
-def save_figure(fig, ax, title: str, ylabel: str, path: Path) -> Path:
-    """Label a time-history axis, write the figure to ``path`` and close it."""
+def save_figure(fig, ax, title: str, ylabel: str, path: Path, xlabel: str = "time [s]") -> Path:
+    """Label an axis (a time history unless ``xlabel`` says otherwise), write the figure to ``path``, close it."""
     import matplotlib.pyplot as plt
 
-    ax.set_xlabel("time [s]")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)

@@ -133,6 +133,34 @@ def _unit_quaternion(v: object) -> tuple[float, float, float, float]:
 UnitQuaternion = Annotated[tuple[float, float, float, float], PlainValidator(_unit_quaternion)]
 """Scalar-last unit quaternion ``[x, y, z, w]`` (body relative to inertial), normalised on input."""
 
+def _torque_box(v: object) -> float | tuple[float, float, float]:
+    """One positive number (every body axis) or a list of 3 positive numbers (x, y, z), kept as given."""
+    hint = "give a positive number (every axis) or a list of 3 positive numbers [x, y, z]"
+    if isinstance(v, (list, tuple)):
+        box = _numbers(v, 3, hint)
+        for i, x in enumerate(box):
+            if x <= 0.0:
+                raise spec_error("must be positive", hint, key=(i,), value=v[i])
+        return box  # type: ignore[return-value]
+    if not _is_number(v):
+        raise spec_error("not a number or a list of 3 numbers", hint)
+    if not math.isfinite(v):  # type: ignore[arg-type]
+        raise spec_error("not a finite number", hint)
+    if v <= 0.0:  # type: ignore[operator]
+        raise spec_error("must be greater than 0", hint)
+    return float(v)  # type: ignore[arg-type]
+
+
+TorqueBox = Annotated[float | tuple[float, float, float], PlainValidator(_torque_box)]
+"""Per-axis bound :math:`|u_i| \\le u_{max,i}`: one positive number for every axis, or 3 (x, y, z); see
+:func:`torque_box_vector`."""
+
+
+def torque_box_vector(box: float | Sequence[float]) -> np.ndarray:
+    """A :data:`TorqueBox` as a read-only length-3 array (a single number repeated on every axis)."""
+    return readonly(np.broadcast_to(np.asarray(box, dtype=float), (3,)).copy())
+
+
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 NonEmptyStr = Annotated[str, Field(min_length=1)]

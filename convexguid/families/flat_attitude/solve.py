@@ -27,7 +27,7 @@ from convexguid.scp.problem import SCPSettings
 from convexguid.scp.state import IterationRecord
 from convexguid.scp.verified import Check, PlanningSetup, Repair, grown_margin
 from convexguid.solution import Solution, Trajectory, planned_solution
-from convexguid.verify import Verification, propagate_attitude, verify_attitude_track
+from convexguid.verify import Verification, propagate_attitude, torque_checks, verify_attitude_track
 
 
 def torque_command(problem: FlatAttitudeProblem, x: np.ndarray) -> Callable[[float], np.ndarray]:
@@ -150,10 +150,10 @@ class FlatAttitudeChecker:
             margin = np.radians(grown_margin(cone_excess, attempt, tol * 10))
             problem = replace(problem, cone_margin_rad=problem.cone_margin_rad + margin)
             done.append(f"cones tightened by {np.degrees(margin):.3g} deg")
-        torque = by_name["torque_Nm"]
+        torque_excess = max((c.violation for c in torque_checks(check.verification.checks)), default=0.0)
         # the flown torque is the interpolated one: check points alone repair it, unless none were found
-        if torque.violation > 0 and between.size == 0:
-            margin = grown_margin(torque.violation, attempt, tol * problem.torque_max)
+        if torque_excess > 0 and between.size == 0:
+            margin = grown_margin(torque_excess, attempt, tol * problem.torque_max)
             problem = replace(problem, torque_margin=problem.torque_margin + margin)
             done.append(f"torque box tightened by {margin:.3g} N m")
         if not done:

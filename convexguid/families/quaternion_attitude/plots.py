@@ -7,7 +7,8 @@ r"""Plots of a ``quaternion_attitude`` solution, after Wang, Xu, Li (seed 003) F
   azimuth wraps at :math:`\pm 180` deg.
 * ``boresight_sphere_3d.png`` (Fig. 7): the same on a wireframe unit sphere, keep-out cones also as faint surfaces.
 * ``quaternion.png``, ``torques.png``, ``body_rates.png`` (Figs. 3-5): dense histories, node values as open
-  circles, :math:`\pm` the bounds of the verification checks ``torque_Nm`` and ``rate_degps``.
+  circles, :math:`\pm` the bounds of the verification checks ``torque_Nm`` and ``rate_degps`` (per-axis
+  torque bounds, checks ``torque_x_Nm``, ``torque_y_Nm``, ``torque_z_Nm``, each in its component's colour).
 * ``cone_angles.png``: the dense ``keep_out_<name>_deg`` / ``keep_in_<name>_deg`` columns with each
   half-angle dashed in the same colour (and, dotted, the figure ``eigenaxis_min_angle_deg`` when present);
   ``forbidden_angles.png`` likewise for ``forbidden_<name>_deg`` columns and their verification bounds.
@@ -35,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray  # noqa: E402
 from convexguid.geometry import eigenaxis_path  # noqa: E402
 from convexguid.rotations import quat_conjugate, quat_rotate  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
+from convexguid.verify import TORQUE_AXIS_CHECKS  # noqa: E402
 
 Save = Callable[..., Path]
 """``save(fig, ax, title, ylabel, path)``: label a time-history axis, write the figure and close it."""
@@ -265,15 +267,28 @@ def _check_bound(solution: Solution, name: str) -> float | None:
 
 
 def _history(solution: Solution, stem: str, title: str, columns: Sequence[tuple[str, str]], ylabel: str,
-             check: str | None, out_dir: Path, save: Save) -> Path:
-    """Dense components with node circles and symmetric ``check`` bound lines."""
+             check: str | None, out_dir: Path, save: Save, axis_checks: Sequence[str] = ()) -> Path:
+    """Dense components with node circles and symmetric ``check`` bound lines.
+
+    ``axis_checks`` name one check per column (e.g. ``torque_x_Nm``, ...): those the verification has are
+    drawn in place of ``check``, in the colour of the (first) column they bound, one line per distinct bound.
+    """
     dense, nodes = solution.dense, solution.nodes
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
     for k, (label, column) in enumerate(c for c in columns if c[1] in dense.columns):
         ax.plot(dense.t, dense.columns[column], color=f"C{k}", lw=1.3, label=label)
         if nodes is not None and column in nodes.columns:
             ax.plot(nodes.t, nodes.columns[column], "o", color=f"C{k}", mfc="none", ms=4)
-    bound = _check_bound(solution, check) if check else None
+    per_axis: dict[float, list[tuple[int, str]]] = {}  # bound -> the components sharing it
+    for k, ((label, _), name) in enumerate(zip(columns, axis_checks, strict=False)):
+        axis_bound = _check_bound(solution, name)
+        if axis_bound is not None:
+            per_axis.setdefault(axis_bound, []).append((k, label))
+    for axis_bound, sharing in per_axis.items():
+        color = f"C{sharing[0][0]}"
+        ax.axhline(axis_bound, color=color, ls="--", lw=0.9, label=f"{', '.join(lb for _, lb in sharing)} limit")
+        ax.axhline(-axis_bound, color=color, ls="--", lw=0.9)
+    bound = _check_bound(solution, check) if check and not per_axis else None
     if bound is not None:
         ax.axhline(bound, color="r", ls="--", lw=0.9, label="limit")
         ax.axhline(-bound, color="r", ls="--", lw=0.9)
@@ -357,7 +372,7 @@ def plot_quaternion_attitude(solution: Solution, out_dir: Path, save: Save) -> l
         _history(solution, "quaternion", "attitude quaternion (Fig. 3)", [(f"q{i}", f"q{i}") for i in (1, 2, 3, 4)],
                  "quaternion [-]", None, out_dir, save),
         _history(solution, "torques", "control torques (Fig. 4)", [(f"u{i}", f"u{i}_Nm") for i in (1, 2, 3)],
-                 "torque [N m]", "torque_Nm", out_dir, save),
+                 "torque [N m]", "torque_Nm", out_dir, save, axis_checks=TORQUE_AXIS_CHECKS),
         _history(solution, "body_rates", "body rates (Fig. 5)", [(f"omega{i}", f"omega{i}_degps") for i in (1, 2, 3)],
                  "rate [deg/s]", "rate_degps", out_dir, save),
     ]

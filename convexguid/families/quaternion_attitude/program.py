@@ -24,8 +24,8 @@ sparse (each defect touches two nodes and :math:`t_f`).
 maps use the quadratic form :math:`C(q)` without normalization. The verification
 propagates the true dynamics and renormalizes.
 
-**Constraints.** Torque and rate boxes at the nodes (the torque is interpolated linearly
-between nodes, so its box holds everywhere); keep-out cones
+**Constraints.** Torque and rate boxes at the nodes (each torque axis with its own bound; the torque
+is interpolated linearly between nodes, so its box holds everywhere); keep-out cones
 :math:`b^T C_{BI}(q_k) r \\le \\cos(\\theta + m)` and keep-in cones
 :math:`b^T C_{BI}(q_k) r \\ge \\cos(\\alpha - m)` at the nodes and at the Hermite-Simpson
 interval midpoints (the rate box too, at the midpoints), with a margin :math:`m` that
@@ -94,11 +94,15 @@ class Forbidden:
 
 @dataclass(frozen=True)
 class AttitudeCase:
-    """A slew in SI units; ``tf`` is ``None`` for minimum time."""
+    """A slew in SI units; ``tf`` is ``None`` for minimum time.
+
+    ``torque_max`` is the torque bound of each body axis (x, y, z), N m: given as one number or three, it is
+    stored as a length-3 array.
+    """
 
     name: str
     inertia: np.ndarray
-    torque_max: float
+    torque_max: np.ndarray
     rate_max: float
     t0: float
     q0: np.ndarray
@@ -108,6 +112,11 @@ class AttitudeCase:
     cones: tuple[PointingCone, ...] = ()
     forbidden: tuple[Forbidden, ...] = ()
     tf: float | None = None
+
+    def __post_init__(self) -> None:
+        box = np.broadcast_to(np.asarray(self.torque_max, dtype=float), (3,)).copy()
+        box.setflags(write=False)
+        object.__setattr__(self, "torque_max", box)
 
     @cached_property
     def inertia_inv(self) -> np.ndarray:
@@ -165,10 +174,11 @@ def eigenaxis_time_guess(case: AttitudeCase) -> float:
 
     The guess follows a cubic angle profile, whose peak acceleration :math:`6\\theta/T^2` is 1.5 times
     that of bang-bang timing; :math:`T = \\sqrt{6\\theta/a}` keeps it at the torque box (gyroscopic terms
-    aside, which a principal-axis or symmetric body does not have).
+    aside, which a principal-axis or symmetric body does not have). The acceleration :math:`a` about the
+    eigenaxis :math:`e` is the largest the tightest axis allows, :math:`\\min_i u_{max,i} / |(I e)_i|`.
     """
     axis, angle = eigenaxis_rotation(case.q0, case.qf)
-    accel = case.torque_max / max(np.abs(case.inertia @ axis).max(), 1e-12)
+    accel = float(np.min(case.torque_max / np.maximum(np.abs(case.inertia @ axis), 1e-12)))
     rate = case.rate_max / max(np.abs(axis).max(), 1e-12)
     return float(max(np.sqrt(6 * angle / accel), 1.5 * angle / rate, 1e-3))
 
@@ -207,7 +217,7 @@ class QuaternionProgram:
 
     def variable_scale(self) -> np.ndarray:
         c = self.case
-        node = np.concatenate([np.ones(4), np.full(3, c.rate_max), np.full(3, c.torque_max)])
+        node = np.concatenate([np.ones(4), np.full(3, c.rate_max), c.torque_max])
         return np.concatenate([np.tile(node, self.num_nodes), [self._tf_guess] if self.free_time else []])
 
     @cached_property
@@ -240,9 +250,9 @@ class QuaternionProgram:
         return np.concatenate([np.repeat(node_w, 3), np.full(3 * self.K, 4 * h / 6)])
 
     def _guess_energy(self, guess: np.ndarray) -> float:
-        """Energy of the initial guess (at least 1e-3 of the energy with every torque at its bound)."""
+        """Energy of the initial guess (at least 1e-3 of the energy with every torque at the largest axis bound)."""
         energy = float(self._simpson_weights() @ (self._energy_rows @ guess.ravel()) ** 2)
-        return max(energy, 1e-3 * 3 * self.case.torque_max**2 * self.case.tf)
+        return max(energy, 1e-3 * 3 * float(np.max(self.case.torque_max))**2 * self.case.tf)
 
     def residual_weights(self) -> np.ndarray:
         return np.zeros(0) if self.free_time else self._simpson_weights()
@@ -262,12 +272,12 @@ class QuaternionProgram:
         b = np.concatenate([c.q0, c.w0, c.qf, c.wf])
         rows, h = [], []
         for k in range(self.num_nodes):
-            for part, bound in ((slice(4, 7), c.rate_max), (slice(7, 10), c.torque_max)):
+            for part, bound in ((slice(4, 7), np.full(3, c.rate_max)), (slice(7, 10), c.torque_max)):
                 for sign in (1.0, -1.0):
                     g = np.zeros((3, n))
                     g[np.arange(3), self._cols(k, part)] = sign
                     rows.append(g)
-                    h.append(np.full(3, bound))
+                    h.append(bound)
         if self.free_time:
             g = np.zeros((1, n))
             g[0, -1] = -1.0

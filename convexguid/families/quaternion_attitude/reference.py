@@ -31,7 +31,7 @@ On ``K`` equal intervals, :math:`h = t_f / K`, with :math:`f_k = f(x_k, u_k)`:
     \\min \\sum_k \\tfrac{h}{6}\\left(|u_k|^2 + 4 |u_c|^2 + |u_{k+1}|^2\\right) \\;(t_f \\text{ fixed}),
 
     \\text{s.t.}\\quad x_0 = x_0^{given},\\; x_K = x_f^{given}, \\quad
-    |\\omega_{k,i}| \\le \\omega_{max}, \\quad |u_{k,i}| \\le u_{max}, \\quad
+    |\\omega_{k,i}| \\le \\omega_{max}, \\quad |u_{k,i}| \\le u_{max,i}, \\quad
     t_f \\ge 10^{-3}\\, t_f^{guess},
 
     c_k = b^T C_{BI}(q_k)\\, r
@@ -46,10 +46,10 @@ for every node :math:`k`, the rate box, the cones and the forbidden attitudes al
 (angles clipped to :math:`[0, \\pi]`).
 :math:`C_{BI}(q)` is the unnormalised quadratic form, exactly as in the SCP transcription (no
 unit-norm constraint: the kinematics conserve :math:`|q|`). IPOPT works on scaled variables
-(quaternions as they are, rates divided by :math:`\\omega_{max}`, torques by :math:`u_{max}`,
-:math:`t_f` by its guess) and on defect rows divided by the same state scales; the objective is
-:math:`t_f / t_f^{guess}` or the energy divided by :math:`u_{max}^2 t_f`. Boundary states, rate
-and torque boxes and the lower bound on :math:`t_f` are variable bounds.
+(quaternions as they are, rates divided by :math:`\\omega_{max}`, torques by their axis bounds
+:math:`u_{max,i}`, :math:`t_f` by its guess) and on defect rows divided by the same state scales; the
+objective is :math:`t_f / t_f^{guess}` or the energy divided by :math:`\\max_i u_{max,i}^2\\, t_f`.
+Boundary states, rate and torque boxes and the lower bound on :math:`t_f` are variable bounds.
 
 References
 ----------
@@ -152,7 +152,8 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
         raise ValueError(f"guess must be ({n1}, {NODE}) node rows, got {guess.shape}")
     free_time = case.tf is None
     n = n1 * NODE + (1 if free_time else 0)
-    node_scale = np.concatenate([np.ones(4), np.full(3, case.rate_max), np.full(3, case.torque_max)])
+    node_scale = np.concatenate([np.ones(4), np.full(3, case.rate_max), case.torque_max])
+    energy_unit = float(np.max(case.torque_max))**2 * float(case.tf) if not free_time else 1.0
     scale = np.concatenate([np.tile(node_scale, n1), [tf_guess] if free_time else []])
 
     z = ca.SX.sym("z", n)  # scaled decision vector
@@ -188,7 +189,7 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
     else:
         uc = (U[:, :-1] + U[:, 1:]) / 2
         energy = h / 6 * (ca.sumsqr(U[:, :-1]) + 4 * ca.sumsqr(uc) + ca.sumsqr(U[:, 1:]))
-        objective = energy / (case.torque_max**2 * float(case.tf))
+        objective = energy / energy_unit
 
     # Variable bounds (scaled): rate and torque boxes, fixed boundary states, t_f > 0.
     lbz, ubz = np.full(n, -np.inf), np.full(n, np.inf)
@@ -210,7 +211,7 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
     wall = time.perf_counter() - start
     stats = solver.stats()
     x = np.asarray(sol["x"]).ravel() * scale
-    value = float(sol["f"]) * (tf_guess if free_time else case.torque_max**2 * float(case.tf))
+    value = float(sol["f"]) * (tf_guess if free_time else energy_unit)
     return ReferenceResult(x=x, objective=value, iterations=int(stats.get("iter_count", -1)),
                            status=str(stats["return_status"]), success=bool(stats["success"]),
                            wall_time_s=wall, setup_time_s=setup)

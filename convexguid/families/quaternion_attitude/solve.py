@@ -51,18 +51,21 @@ def build_case(spec) -> AttitudeCase:
         qf = -qf
     cones = tuple(c.pointing_cone() for c in (*spec.keep_out, *spec.keep_in))
     forbidden = tuple(Forbidden(f.name, np.array(f.quaternion), np.radians(f.min_angle_deg)) for f in spec.forbidden)
-    return AttitudeCase(spec.name, sc.inertia_matrix, sc.torque_max_Nm, np.radians(sc.rate_max_degps), b.t0_s, q0,
+    return AttitudeCase(spec.name, sc.inertia_matrix, sc.torque_max_vector, np.radians(sc.rate_max_degps), b.t0_s, q0,
                         np.array(b.initial.rate_radps), qf, np.array(b.final.rate_radps), cones, forbidden, b.tf_s)
 
 
 def path_transfer_problem(case: AttitudeCase) -> PathTransferProblem:
-    """The planner's view of the case (keep-out cones of one boresight; keep-in and forbidden attitudes unsupported)."""
+    """The planner's view of the case (keep-out cones of one boresight; keep-in and forbidden attitudes unsupported).
+
+    The planner takes one torque bound for every axis: the smallest of the case's three.
+    """
     keep_out = [c for c in case.cones if c.keep_out]
     boresight = keep_out[0].body_axis if keep_out else np.array([0.0, 0.0, 1.0])
     return PathTransferProblem(case.inertia, boresight, case.q0, case.qf,
                                tuple(PointingCone(c.name, c.body_axis, c.inertial_dir, c.half_angle_rad)
                                      for c in keep_out),  # re-normalised, as the planner always did
-                               case.torque_max, case.rate_max)
+                               float(np.min(case.torque_max)), case.rate_max)
 
 
 def verify_plan(case: AttitudeCase, t_end: float, torque: Callable[[float], np.ndarray], settings,

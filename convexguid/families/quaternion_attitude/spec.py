@@ -1,14 +1,16 @@
 """Problem family ``quaternion_attitude``: rigid-body slews under keep-out/keep-in cones, torque and rate boxes.
 
 Attitudes are scalar-last quaternions ``[x, y, z, w]`` (Hamilton product, body relative
-to inertial), or an Euler axis and angle. A quaternion whose norm is within
-:data:`convexguid.spec.common.QUATERNION_NORM_TOL` of 1 is normalised (printed rounding); any
-other norm, zero included, is an error, since it is almost certainly a typo.
+to inertial), an Euler axis and angle, or Z-Y-X (3-2-1) Euler angles ``roll_pitch_yaw_deg``.
+A quaternion whose norm is within :data:`convexguid.spec.common.QUATERNION_NORM_TOL` of 1 is
+normalised (printed rounding); any other norm, zero included, is an error, since it is almost
+certainly a typo. ``spacecraft.torque_max_Nm`` is one bound for every body axis or three (x, y, z).
 
 References
 ----------
 Wang, Xu, Li, path-transfer fast planning for large-angle attitude maneuvers under
-multiple constraints (seed 003); Guo, Li, Ma 2011 (forbidden attitude, seed 001).
+multiple constraints (seed 003); Guo, Li, Ma 2011 (forbidden attitude, seed 001); Feng, Chen, Yang 2018
+(per-axis torque box, Z-Y-X Euler boundary attitudes, seed 004).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from convexguid.geometry import PointingCone
-from convexguid.rotations import axis_angle_to_quat, quat_angle_between
+from convexguid.rotations import axis_angle_to_quat, euler321_to_quat, quat_angle_between
 from convexguid.spec.common import (
     Direction3,
     InertiaMatrix,
@@ -32,34 +34,48 @@ from convexguid.spec.common import (
     ResultLink,
     SolverSettings,
     SpecModel,
+    TorqueBox,
     UnitQuaternion,
     Vector3,
     VerificationSettings,
     named_list,
     readonly,
     spec_error,
+    torque_box_vector,
 )
 
 
 class Attitude(SpecModel):
-    """An attitude: ``quaternion`` or ``axis`` + ``angle_deg`` (rotation of the body from the inertial frame)."""
+    """An attitude of the body relative to the inertial frame, in exactly one of three forms.
+
+    ``quaternion`` (scalar last), ``axis`` + ``angle_deg`` (Euler axis and angle), or
+    ``roll_pitch_yaw_deg: [roll, pitch, yaw]``: Z-Y-X (3-2-1) Euler angles, yaw :math:`\\psi` about z,
+    then pitch :math:`\\theta` about the new y, then roll :math:`\\phi` about the new x, so
+    :math:`C_{BI} = R_1(\\phi) R_2(\\theta) R_3(\\psi)` (:func:`convexguid.rotations.euler321_to_quat`);
+    ``roll_pitch_yaw_deg: [0, 0, 90]`` is ``axis: [0, 0, 1], angle_deg: 90``.
+    """
 
     quaternion: UnitQuaternion | None = None
     axis: Direction3 | None = None
     angle_deg: float | None = None
+    roll_pitch_yaw_deg: Vector3 | None = None
     rate_degps: Vector3 = (0.0, 0.0, 0.0)
 
     @model_validator(mode="after")
     def _one_form(self) -> Attitude:
         by_axis = self.axis is not None or self.angle_deg is not None
-        if (self.quaternion is None) == (not by_axis) or (by_axis and (self.axis is None or self.angle_deg is None)):
-            raise spec_error("give either quaternion, or both axis and angle_deg", "e.g. quaternion: [0, 0, 0, 1]")
+        forms = (self.quaternion is not None) + by_axis + (self.roll_pitch_yaw_deg is not None)
+        if forms != 1 or (by_axis and (self.axis is None or self.angle_deg is None)):
+            raise spec_error("give exactly one of quaternion, both axis and angle_deg, or roll_pitch_yaw_deg",
+                             "e.g. quaternion: [0, 0, 0, 1] or roll_pitch_yaw_deg: [0, 0, 0]")
         return self
 
     @property
     def q(self) -> np.ndarray:
         if self.quaternion is not None:
             return readonly(np.array(self.quaternion))
+        if self.roll_pitch_yaw_deg is not None:
+            return readonly(euler321_to_quat(np.radians(self.roll_pitch_yaw_deg)))
         return readonly(axis_angle_to_quat(self.axis, math.radians(self.angle_deg)))
 
     @property
@@ -98,15 +114,24 @@ class QuaternionBoundary(SpecModel):
 
 
 class AttitudeSpacecraft(SpecModel):
-    """Rigid body with per-axis torque and rate boxes."""
+    """Rigid body with per-axis torque and rate boxes.
+
+    ``torque_max_Nm`` is one positive number (the same bound on every body axis) or a list of 3 (x, y, z),
+    :math:`|u_i| \\le u_{max,i}`; ``rate_max_degps`` bounds every body-rate component.
+    """
 
     inertia_kgm2: InertiaMatrix
-    torque_max_Nm: PositiveFloat
+    torque_max_Nm: TorqueBox
     rate_max_degps: PositiveFloat
 
     @property
     def inertia_matrix(self) -> np.ndarray:
         return readonly(np.array(self.inertia_kgm2))
+
+    @property
+    def torque_max_vector(self) -> np.ndarray:
+        """Torque bound of each body axis (x, y, z), N m (length 3, read-only)."""
+        return torque_box_vector(self.torque_max_Nm)
 
 
 class KeepInSpec(SpecModel):

@@ -1,0 +1,42 @@
+"""Family ``lpmpc``: a planned attitude nominal flown by linear pseudospectral MPC and LQR (Feng, Chen, Yang 2018).
+
+Simulated, not planned: ``convexguid simulate`` solves and verifies the nominal (another problem file),
+then flies it closed loop. Modules: ``spec`` (problem file), ``scenario`` (nominal in MRPs, laws, runs),
+``solve`` (single case, Monte Carlo on a process pool, verification, summary), ``figures``, ``plots``,
+``report`` (the paper's Tables 2-4 beside ours) and ``bench`` (update times of LPMPC and LQR).
+The control laws live in :mod:`convexguid.control` (``lpmpc``, ``lpmpc_tracker``, ``lqr``).
+"""
+
+from __future__ import annotations
+
+from convexguid.families.base import Family, lazy
+from convexguid.families.lpmpc.figures import LpmpcFigures
+from convexguid.families.lpmpc.spec import LpmpcProblem
+
+
+def _solve(spec, log=None):
+    """Simulate (``log`` is unused: the SCP iterations of the nominal are not shown)."""
+    from convexguid.families.lpmpc.solve import simulate_lpmpc
+
+    return simulate_lpmpc(spec)
+
+
+FAMILY = Family(
+    name="lpmpc",
+    spec_model=LpmpcProblem,
+    solve=_solve,
+    plot=lazy("convexguid.families.lpmpc.plots:plot_lpmpc"),
+    verification_method="the nominal's dense re-propagation and the closed-loop LPMPC flight",
+    figures=LpmpcFigures,
+    simulated=True,
+    key_figures=(
+        ("nominal_energy_N2m2s", "nominal plan: energy integral of squared torque, N^2 m^2 s"),
+        ("lpmpc_energy_N2m2s", "LPMPC closed loop: energy, N^2 m^2 s"),
+        ("lpmpc_final_angle_error_deg", "LPMPC: final attitude error, deg"),
+        ("lpmpc_final_rate_error_degps", "LPMPC: final rate error, deg/s"),
+        ("corrections", "LPMPC corrections fired"),
+        ("update_checks", "LPMPC update checks"),
+        ("closed_form_leaves_box", "closed-form corrections that would leave the torque box"),
+        ("correction_time_median_ms", "median correction time (prediction + KKT), ms"),
+    ),
+)
