@@ -52,6 +52,9 @@ class Family:
         ``planning_setup(spec) -> PlanningSetup`` (:mod:`convexguid.scp.verified`) for a planned family: how it
         builds the SCP program, with which settings, and its checker (dense verification and repairs). ``solve``
         runs it through the engine's check-repair loop and summarises; None for a simulated family.
+    report_section : callable or None
+        ``report_section(spec, solution) -> list[str]``: markdown the validation report adds under the case (e.g.
+        the paper's tables beside the family's figures); it renders, it computes nothing. None: nothing extra.
     bench : callable or None
         ``bench(problem_path, args) -> int`` (exit code) for ``convexguid bench``; None if the family has none.
     """
@@ -65,6 +68,7 @@ class Family:
     simulated: bool = False
     key_figures: tuple[tuple[str, str], ...] = ()
     planning_setup: Callable[[ProblemBase], PlanningSetup] | None = None
+    report_section: Callable[[ProblemBase, Solution], list[str]] | None = None
     bench: Callable[[str | PathLike[str], argparse.Namespace], int] | None = None
 
 

@@ -213,7 +213,8 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
     lines = ["", f"## {r.spec.name}", "", f"*{' '.join(ref.citation.split())}*, {ref.table}.", ""]
     if r.spec.notes:
         lines += [f"Notes: {' '.join(r.spec.notes.split())}", ""]
-    lines += ["| quantity | paper | convexguid | relative difference | within tolerance |", "|---|---|---|---|---|"]
+    if r.rows:
+        lines += ["| quantity | paper | convexguid | relative difference | within tolerance |", "|---|---|---|---|---|"]
     for row in r.rows:
         rel = "n/a" if row.rel_diff is None else f"{row.rel_diff:.2e}"
         paper = _fmt(row.paper) if row.rel_diff is not None or row.ours is None else f"limit {_fmt(row.paper)}"
@@ -233,6 +234,8 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
     if figures:
         lines += ["", "| figure | value |", "|---|---|"]
         lines += [f"| {label} | {_fmt_any(value)} |" for label, value in figures]
+    if family.report_section is not None:
+        lines += family.report_section(r.spec, sol)
     v = sol.verification
     if v is not None:
         lines += ["", f"Dense verification ({v.grid_points} points, {family.verification_method}):",

@@ -29,6 +29,8 @@ FAMILY = Family(
     verification_method="the nominal's dense re-propagation and the closed-loop LPMPC flight",
     figures=LpmpcFigures,
     simulated=True,
+    report_section=lazy("convexguid.families.lpmpc.report:report_section"),
+    bench=lazy("convexguid.families.lpmpc.bench:bench_command"),
     key_figures=(
         ("nominal_energy_N2m2s", "nominal plan: energy integral of squared torque, N^2 m^2 s"),
         ("lpmpc_energy_N2m2s", "LPMPC closed loop: energy, N^2 m^2 s"),

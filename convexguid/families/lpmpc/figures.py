@@ -23,6 +23,7 @@ class ControllerRun:
     final_rate_error_degps: float
     energy_N2m2s: float
     command_time_s: float
+    run_time_s: float
     corrections: int | None = None
     checks: int | None = None
 
@@ -58,6 +59,8 @@ class MonteCarloFigures:
     runs_lpmpc_saves_energy: int
     corrections_per_run: Spread
     corrections_range: tuple[int, int]
+    lpmpc_run_time_s: Spread
+    lqr_run_time_s: Spread
     closed_form_leaves_box_runs: int
     per_run: tuple[dict, ...]
 
@@ -80,6 +83,9 @@ class LpmpcFigures(Figures):
         LPMPC corrections fired, update checks made, and corrections whose closed form leaves the torque box.
     prediction_time_median_ms, correction_time_median_ms, integration_time_median_ms : float or None
         Per update: analytic prediction (eq. 42), correction (KKT or QP), method-2 integrations.
+    update_time_ms : dict of str to float
+        Median compute time of one update (:mod:`convexguid.families.lpmpc.timing`): ``lqr``, ``lpmpc_n<N>``
+        for the file's ``timing_nodes``, and ``integration`` (method 2 over the whole horizon).
     monte_carlo : MonteCarloFigures or None
         Present when the problem file has a ``monte_carlo`` section.
     """
@@ -97,4 +103,5 @@ class LpmpcFigures(Figures):
     prediction_time_median_ms: float | None = None
     correction_time_median_ms: float | None = None
     integration_time_median_ms: float | None = None
+    update_time_ms: dict[str, float] | None = optional()
     monte_carlo: MonteCarloFigures | None = optional()

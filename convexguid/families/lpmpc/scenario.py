@@ -112,9 +112,10 @@ def fly_monte_carlo_run(scenario: Scenario, seed: np.random.SeedSequence, euler_
 
     Returns plain numbers and the histories every ``stride`` steps (for the envelopes).
     """
-    errors_rng, flight_seed = np.random.default_rng(seed.spawn(1)[0]), int(seed.generate_state(1)[0])
-    euler_error = errors_rng.normal(0.0, euler_std_deg, 3)
-    rate_error = errors_rng.normal(0.0, rate_std_degps, 3)
+    rng = np.random.default_rng(seed)  # reads the seed's state, does not spawn from it: the same run every time
+    euler_error = rng.normal(0.0, euler_std_deg, 3)
+    rate_error = rng.normal(0.0, rate_std_degps, 3)
+    flight_seed = int(rng.integers(2**63))
     x0 = scenario.initial_state(euler_error, rate_error)
     lpmpc, lqr = scenario.laws(with_direct=False)[:2]
     run = {"euler_error_deg": euler_error.tolist(), "rate_error_degps": rate_error.tolist()}
@@ -125,7 +126,7 @@ def fly_monte_carlo_run(scenario: Scenario, seed: np.random.SeedSequence, euler_
                     "final_rate_degps": flight.final_rate_degps.tolist(),
                     "angle_error_deg": attitude_error_deg(flight.x[-1], scenario.target),
                     "rate_error_degps": rate_error_degps(flight.x[-1], scenario.target),
-                    "energy_N2m2s": flight.energy,
+                    "energy_N2m2s": flight.energy, "run_time_s": flight.wall_time_s,
                     "euler_deg": np.degrees(quat_to_euler321(mrp_to_quat(flight.x[::stride, :3]))),
                     "rate_degps": np.degrees(flight.x[::stride, 3:])}
         if law is lpmpc:

@@ -28,6 +28,7 @@ from convexguid.families.lpmpc.scenario import (
     rate_error_degps,
     resolve_nominal_path,
 )
+from convexguid.families.lpmpc.timing import update_times_ms
 from convexguid.rotations import mrp_to_quat, quat_to_euler321, quat_to_mrp
 from convexguid.scp.problem import ProgramSize
 from convexguid.sim.tracking import Sensors
@@ -87,6 +88,7 @@ def simulate_lpmpc(spec) -> Solution:
     lpmpc_flight, tracker = flights[0]
     checks = tracker.checks
     monte_carlo, envelopes = _monte_carlo(spec, scenario) if spec.monte_carlo is not None else (None, {})
+    update_times = update_times_ms(scenario, spec.timing_nodes) if spec.timing_nodes else None
     figures = LpmpcFigures(
         **base, runs=runs, lpmpc_energy_N2m2s=runs[0].energy_N2m2s,
         lpmpc_final_angle_error_deg=runs[0].final_angle_error_deg,
@@ -95,7 +97,7 @@ def simulate_lpmpc(spec) -> Solution:
         prediction_time_median_ms=_median_ms([c.prediction_time_s for c in checks]),
         correction_time_median_ms=_median_ms([c.correction_time_s for c in checks if c.corrected]),
         integration_time_median_ms=_median_ms([c.integration_time_s for c in checks if c.miss is not None]),
-        monte_carlo=monte_carlo)
+        update_time_ms=update_times, monte_carlo=monte_carlo)
     verification = _verification(spec, nominal, runs[0], lpmpc_flight.t.size)
     status = "converged" if verification.passed else "unverified"
     message = (f"{tracker.corrections} LPMPC corrections in {len(checks)} checks; final attitude error "
@@ -119,7 +121,8 @@ def _controller_run(flight, law, target: np.ndarray) -> ControllerRun:
     corrections = getattr(law, "corrections", None)
     return ControllerRun(flight.controller, tuple(flight.final_euler_deg.tolist()),
                          tuple(flight.final_rate_degps.tolist()), attitude_error_deg(flight.x[-1], target),
-                         rate_error_degps(flight.x[-1], target), flight.energy, flight.command_time_s, corrections,
+                         rate_error_degps(flight.x[-1], target), flight.energy, flight.command_time_s,
+                         flight.wall_time_s, corrections,
                          len(law.checks) if corrections is not None else None)
 
 
@@ -203,6 +206,8 @@ def _monte_carlo_figures(results: list[dict], workers: int, wall: float) -> Mont
         lpmpc_energy_N2m2s=_spread(e_lpmpc), lqr_energy_N2m2s=_spread(e_lqr), saving=_spread(saving),
         saving_range=(float(saving.min()), float(saving.max())), runs_lpmpc_saves_energy=int((saving > 0).sum()),
         corrections_per_run=_spread(corrections), corrections_range=(int(corrections.min()), int(corrections.max())),
+        lpmpc_run_time_s=_spread([r["lpmpc"]["run_time_s"] for r in results]),
+        lqr_run_time_s=_spread([r["lqr"]["run_time_s"] for r in results]),
         closed_form_leaves_box_runs=int(sum(r["lpmpc"]["leaves_box"] > 0 for r in results)), per_run=per_run)
 
 

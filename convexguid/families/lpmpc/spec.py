@@ -101,6 +101,36 @@ class ClosedLoopChecks(SpecModel):
     final_rate_degps: PositiveFloat = 0.2
 
 
+class PaperRow(SpecModel):
+    """One law's row of the paper's Table 2 (final 3-2-1 Euler angles, rates, energy); ``controller`` names
+    the matching law here (``lpmpc``, ``lqr_tracking_r<r>``, ``lqr_direct_r<r>``)."""
+
+    controller: NonEmptyStr
+    final_euler_deg: Vector3
+    final_rate_degps: Vector3
+    energy_N2m2s: PositiveFloat
+
+
+class PaperSpread(SpecModel):
+    """A mean and standard deviation as printed in the paper's Table 3."""
+
+    mean: float
+    std: NonNegativeFloat
+
+
+class PaperTables(SpecModel):
+    """The paper's published figures for this case, rendered beside ours (its scenario differs: compare
+    ratios and orders of magnitude). ``table3_*``: six items (roll, pitch, yaw deg; omega 1-3 deg/s);
+    ``table4_command_ms`` / ``table4_run_s``: by law (``lqr``, ``lpmpc_n8``, ...)."""
+
+    table2: list[PaperRow] = Field(default_factory=list)
+    table3_lpmpc: Annotated[list[PaperSpread], Field(min_length=6, max_length=6)] | None = None
+    table3_lqr: Annotated[list[PaperSpread], Field(min_length=6, max_length=6)] | None = None
+    table4_command_ms: dict[str, PositiveFloat] = Field(default_factory=dict)
+    table4_run_s: dict[str, PositiveFloat] = Field(default_factory=dict)
+    energy_saving: float | None = None
+
+
 class LpmpcProblem(ProblemBase):
     """An ``lpmpc`` problem file (see ``problems/feng2018_lpmpc_*.yaml``)."""
 
@@ -115,4 +145,7 @@ class LpmpcProblem(ProblemBase):
     lqr: LqrSettingsSpec = Field(default_factory=LqrSettingsSpec)
     monte_carlo: MonteCarlo | None = None
     checks: ClosedLoopChecks = Field(default_factory=ClosedLoopChecks)
+    timing_nodes: list[Annotated[int, Field(ge=3, le=40)]] = Field(default_factory=list)
+    """LGR point counts whose update time (prediction + correction) is measured on the single case."""
+    paper: PaperTables | None = None
     reference: Reference | None = None

@@ -1,0 +1,102 @@
+"""``convexguid bench`` on an ``lpmpc`` file: update times of LQR and LPMPC, and the box-constrained correction.
+
+Two tables, measured in the same run on this machine:
+
+1. one command update (median of ``--repeat`` x 20 calls): LQR (one Riccati solve), LPMPC with N = 8, 10, 12
+   (error matrices, :math:`K_x, K_u`, eq. 42 prediction, closed-form correction), LPMPC N = 8 with the
+   box-constrained QP instead (Clarabel), and the method-2 integration over the whole horizon;
+2. a short Monte Carlo (``--runs``, default 20, the file's error distribution and seed) flown by LPMPC
+   with the closed-form correction and with the box QP, with the file's box and with a tighter one: how
+   many runs had a closed-form correction leave the torque box, and the energies, terminal errors and
+   run times of both.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import replace
+from os import PathLike
+from pathlib import Path
+
+import numpy as np
+
+from convexguid.bench_common import environment_lines, markdown_grid
+from convexguid.control.lpmpc import box_constrained_correction, terminal_map
+from convexguid.dynamics.mrp_attitude import mrp_error_matrices
+from convexguid.errors import SpecError
+from convexguid.families.lpmpc.scenario import fly_monte_carlo_run
+from convexguid.families.lpmpc.solve import build_scenario
+from convexguid.families.lpmpc.timing import update_times_ms
+from convexguid.solution import write_text_atomic
+from convexguid.spec import load_problem
+from convexguid.transcription.lgr import RadauGrid
+
+BENCH_NODES = (8, 10, 12)
+
+
+def _box_update_ms(scenario, repeat: int) -> float:
+    nominal, inertia_inv = scenario.nominal, np.linalg.inv(scenario.inertia)
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        grid = RadauGrid(8, float(nominal.t[0]), float(nominal.t[-1]))
+        A, B = mrp_error_matrices(nominal.state(grid.times), scenario.inertia, inertia_inv)
+        box_constrained_correction(terminal_map(grid, A, B), nominal.control(grid.times[1:]), 1e-3 * np.ones(6),
+                                   scenario.u_max)
+        times.append(time.perf_counter() - start)
+    return float(1e3 * np.median(times))
+
+
+TIGHT_BOX = 0.75
+"""The stress case of table 2: the same nominal with the actuator box scaled by this (the nominal peaks at 0.74 of it
+on the z axis), so that corrections meet the box."""
+
+
+def _monte_carlo_pair(spec, scenario, runs: int) -> list[list[str]]:
+    mc = spec.monte_carlo
+    euler_std = float(np.sqrt(mc.euler_var_deg2)) if mc else 3.16
+    rate_std = float(np.sqrt(mc.rate_var_degps2)) if mc else 2.24
+    seeds = np.random.SeedSequence(spec.simulation.seed).spawn(runs)
+    rows = []
+    for box, scale in (("file's box", 1.0), (f"box x {TIGHT_BOX}", TIGHT_BOX)):
+        for label, boxed in (("closed form (eqs. 45-56)", False), ("box-constrained QP", True)):
+            sc = replace(scenario, u_max=scale * scenario.u_max,
+                         lpmpc=replace(scenario.lpmpc, box_constrained=boxed))
+            rows.append(_pair_row(f"{box}, {label}", sc, seeds, euler_std, rate_std))
+    return rows
+
+
+def _pair_row(label: str, sc, seeds, euler_std: float, rate_std: float) -> list[str]:
+    results = [fly_monte_carlo_run(sc, seed, euler_std, rate_std, 1000)["lpmpc"] for seed in seeds]
+    return [label, str(len(seeds)), str(sum(r["leaves_box"] > 0 for r in results)),
+            f"{np.mean([r['energy_N2m2s'] for r in results]):.4g}",
+            f"{np.mean([r['angle_error_deg'] for r in results]):.3g}",
+            f"{np.mean([r['rate_error_degps'] for r in results]):.3g}",
+            f"{np.mean([r['run_time_s'] for r in results]):.3f}"]
+
+
+def run_lpmpc_bench(problem_path: str | PathLike[str], repeat: int, runs: int, output: Path | None) -> int:
+    spec = load_problem(problem_path)
+    scenario, nominal = build_scenario(spec)
+    if scenario is None:
+        raise SpecError(f"{problem_path}: the nominal plan is {nominal.status}: {nominal.message}")
+    times = update_times_ms(scenario, list(BENCH_NODES), repeat=20 * repeat)
+    times["lpmpc_n8_box_qp"] = _box_update_ms(scenario, 20 * repeat)
+    update = markdown_grid(["update", "median [ms]"], ["---", "---:"], [[k, f"{v:.3g}"] for k, v in times.items()])
+    pair = markdown_grid(["LPMPC correction", "runs", "runs leaving the box (closed form)", "mean energy [N^2 m^2 s]",
+                          "mean final angle error [deg]", "mean final rate error [deg/s]", "mean run time [s]"],
+                         ["---"] + ["---:"] * 6, _monte_carlo_pair(spec, scenario, runs))
+    text = "\n".join([f"# LPMPC benchmark: {spec.name}", "", f"Command: `convexguid bench {problem_path} "
+                      f"--repeat {repeat} --runs {runs}`", "", *environment_lines(["numpy", "scipy", "clarabel"]), "",
+                      "## One command update", "", update, "",
+                      "## Closed-form against box-constrained correction (same seeds)", "", pair, ""])
+    print(text)
+    if output is not None:
+        write_text_atomic(output, text)
+    return 0
+
+
+def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
+    """``convexguid bench`` on an ``lpmpc`` file (``--nodes`` and ``--backends`` do not apply)."""
+    return run_lpmpc_bench(problem_path, args.repeat, getattr(args, "runs", 20), args.output)
