@@ -102,6 +102,20 @@ def energy_optimal_correction(tmap: TerminalMap, u_nodes: np.ndarray, miss: np.n
     return (omega_inv * (Ku.T @ lam) - U).reshape(u_nodes.shape)
 
 
+def least_change_correction(tmap: TerminalMap, miss: np.ndarray, m: int = 3) -> np.ndarray:
+    """Node corrections cancelling the linear miss with the least energy of the *correction*,
+    :math:`\\delta\\hat U = -\\Omega^{-1} K_u^T P^{-1} e`.
+
+    The paper rejects this objective (Sec. 2.2) because it does not keep the corrected control
+    energy-optimal. It is the right one for a nominal whose path constraints are active (a keep-out zone, a
+    forbidden attitude): the energy-optimal correction moves the control towards the unconstrained optimum,
+    which ignores them, even for a zero miss; this one leaves the nominal alone when nothing is missed.
+    """
+    omega_inv = 1.0 / np.repeat(tmap.energy_weights, m)
+    P = (tmap.Ku * omega_inv) @ tmap.Ku.T
+    return (-omega_inv * (tmap.Ku.T @ np.linalg.solve(P, miss))).reshape(-1, m)
+
+
 def box_constrained_correction(tmap: TerminalMap, u_nodes: np.ndarray, miss: np.ndarray, u_max: np.ndarray,
                                backend: str = "clarabel") -> np.ndarray | None:
     """As :func:`energy_optimal_correction`, with :math:`|\\tilde u_k + \\delta u_k|_i \\le U_{max,i}` at the nodes.

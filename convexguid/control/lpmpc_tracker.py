@@ -19,7 +19,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from convexguid.control.lpmpc import box_constrained_correction, energy_optimal_correction, terminal_map
+from convexguid.control.lpmpc import (
+    box_constrained_correction,
+    energy_optimal_correction,
+    least_change_correction,
+    terminal_map,
+)
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices
 from convexguid.sim.tracking import Nominal, integrate
 from convexguid.transcription.lgr import RadauGrid
@@ -27,7 +32,9 @@ from convexguid.transcription.lgr import RadauGrid
 
 @dataclass(frozen=True)
 class LpmpcSettings:
-    """``nodes`` N (LGR points); thresholds on the predicted terminal deviation (MRP, rad/s)."""
+    """``nodes`` N (LGR points); thresholds on the predicted terminal deviation (MRP, rad/s); the correction:
+    energy-optimal (eqs. 45-56), then the box QP if that leaves the torque box (``box_constrained``), or the
+    least change of the torque (``least_change``, for nominals with active path constraints)."""
 
     nodes: int
     check_interval_s: float
@@ -35,6 +42,7 @@ class LpmpcSettings:
     threshold_radps: float
     box_constrained: bool = False
     backend: str = "clarabel"
+    least_change: bool = False
 
     @property
     def thresholds(self) -> np.ndarray:
@@ -110,7 +118,8 @@ class LpmpcTracker:
             return
         grid, tmap = self._map(t, lambda times: _interp(grid_t, flown, times))
         u_nodes = nominal.control(grid.times[1:])
-        du = energy_optimal_correction(tmap, u_nodes, miss)
+        du = (least_change_correction(tmap, miss, u_nodes.shape[1]) if s.least_change
+              else energy_optimal_correction(tmap, u_nodes, miss))
         leaves = bool(np.any(np.abs(u_nodes + du) > self.u_max * (1 + 1e-9)))
         if s.box_constrained and leaves:
             boxed = box_constrained_correction(tmap, u_nodes, miss, self.u_max, s.backend)

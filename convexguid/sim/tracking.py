@@ -17,6 +17,7 @@ import numpy as np
 
 from convexguid.dynamics.mrp_attitude import rk4_step, shortest_mrp
 from convexguid.rotations import euler321_to_quat, mrp_to_quat, quat_to_euler321, quat_to_mrp
+from convexguid.sim.reaction_wheel import guo2011_disturbance
 
 
 @dataclass(frozen=True)
@@ -71,6 +72,20 @@ class Sensors:
         return np.concatenate([sigma, x[3:] + rng.normal(0.0, self.rate_std_radps, 3)])
 
 
+@dataclass(frozen=True)
+class DisturbanceTorque:
+    """The disturbance torque held over a step starting at ``t``: Gaussian per axis (``model = "gaussian"``,
+    standard deviation ``std_Nm``) or Guo, Li, Ma's deterministic Sec. 4 torque (``model = "guo2011"``)."""
+
+    model: str = "gaussian"
+    std_Nm: float = 0.0
+
+    def __call__(self, t: float, rng: np.random.Generator) -> np.ndarray:
+        if self.model == "guo2011":
+            return guo2011_disturbance(t)
+        return rng.normal(0.0, self.std_Nm, 3)
+
+
 class Controller(Protocol):
     """A tracking or regulating law: a torque command from the time and the measured state."""
 
@@ -101,7 +116,7 @@ class Flight:
 
 
 def fly(controller: Controller, x0: np.ndarray, t: np.ndarray, inertia: np.ndarray, u_max: np.ndarray,
-        sensors: Sensors, disturbance_std_Nm: float, rng: np.random.Generator) -> Flight:
+        sensors: Sensors, disturbance: DisturbanceTorque, rng: np.random.Generator) -> Flight:
     """Fly ``controller`` from the true state ``x0`` over the grid ``t`` (command and disturbance held per step)."""
     start = time.perf_counter()
     inertia_inv = np.linalg.inv(inertia)
@@ -114,7 +129,7 @@ def fly(controller: Controller, x0: np.ndarray, t: np.ndarray, inertia: np.ndarr
         c0 = time.perf_counter()
         u[k] = np.clip(controller.command(float(t[k]), measured), -u_max, u_max)
         command_time += time.perf_counter() - c0
-        d = rng.normal(0.0, disturbance_std_Nm, 3)
+        d = disturbance(float(t[k]), rng)
         x[k + 1] = rk4_step(x[k], u[k] + d, t[k + 1] - t[k], inertia, inertia_inv)
         x[k + 1, :3] = shortest_mrp(x[k + 1, :3])
     u[-1] = u[-2]

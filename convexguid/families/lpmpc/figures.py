@@ -88,6 +88,10 @@ class LpmpcFigures(Figures):
         for the file's ``timing_nodes``, and ``integration`` (method 2 over the whole horizon).
     monte_carlo : MonteCarloFigures or None
         Present when the problem file has a ``monte_carlo`` section.
+    maneuver_time_s : float or None
+        The nominal's (and so every flight's) duration, s.
+    min_forbidden_angle_deg : float or None
+        Smallest angle of the LPMPC flight to a forbidden attitude of the nominal's problem, deg (if it has any).
     """
 
     nominal_problem: str
@@ -105,3 +109,5 @@ class LpmpcFigures(Figures):
     integration_time_median_ms: float | None = None
     update_time_ms: dict[str, float] | None = optional()
     monte_carlo: MonteCarloFigures | None = optional()
+    maneuver_time_s: float | None = None
+    min_forbidden_angle_deg: float | None = optional()

@@ -24,7 +24,7 @@ from convexguid.rotations import (
     quat_to_euler321,
     quat_to_mrp,
 )
-from convexguid.sim.tracking import Flight, Nominal, Sensors, fly
+from convexguid.sim.tracking import DisturbanceTorque, Flight, Nominal, Sensors, fly
 from convexguid.solution import Solution
 
 
@@ -37,7 +37,7 @@ class Scenario:
     u_max: np.ndarray
     target: np.ndarray
     sensors: Sensors
-    disturbance_std_Nm: float
+    disturbance: DisturbanceTorque
     lpmpc: LpmpcSettings
     lqr_q: float
     lqr_r: tuple[float, ...]
@@ -50,7 +50,7 @@ class Scenario:
 
     def laws(self, with_direct: bool = True) -> list:
         """LPMPC, then for each r: LQR tracking and (``with_direct``) LQR direct."""
-        out = [LpmpcTracker(self.nominal, self.target, self.inertia, self.u_max, self.lpmpc)]
+        out: list = [LpmpcTracker(self.nominal, self.target, self.inertia, self.u_max, self.lpmpc)]
         for r in self.lqr_r:
             out.append(LqrTracker(f"lqr_tracking_r{r:g}", self.nominal, self.inertia, self.lqr_q, r))
             if with_direct:
@@ -101,7 +101,7 @@ def fly_all(scenario: Scenario, x0: np.ndarray, seed: int) -> list[tuple[Flight,
     out = []
     for law in scenario.laws():
         flight = fly(law, x0, scenario.nominal.t, scenario.inertia, scenario.u_max, scenario.sensors,
-                     scenario.disturbance_std_Nm, np.random.default_rng(seed))
+                     scenario.disturbance, np.random.default_rng(seed))
         out.append((flight, law))
     return out
 
@@ -121,7 +121,7 @@ def fly_monte_carlo_run(scenario: Scenario, seed: np.random.SeedSequence, euler_
     run = {"euler_error_deg": euler_error.tolist(), "rate_error_degps": rate_error.tolist()}
     for key, law in (("lpmpc", lpmpc), ("lqr", lqr)):
         flight = fly(law, x0, scenario.nominal.t, scenario.inertia, scenario.u_max, scenario.sensors,
-                     scenario.disturbance_std_Nm, np.random.default_rng(flight_seed))
+                     scenario.disturbance, np.random.default_rng(flight_seed))
         run[key] = {"final_euler_deg": flight.final_euler_deg.tolist(),
                     "final_rate_degps": flight.final_rate_degps.tolist(),
                     "angle_error_deg": attitude_error_deg(flight.x[-1], scenario.target),

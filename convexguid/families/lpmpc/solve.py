@@ -29,9 +29,9 @@ from convexguid.families.lpmpc.scenario import (
     resolve_nominal_path,
 )
 from convexguid.families.lpmpc.timing import update_times_ms
-from convexguid.rotations import mrp_to_quat, quat_to_euler321, quat_to_mrp
+from convexguid.rotations import mrp_to_quat, quat_angle_between, quat_to_euler321, quat_to_mrp
 from convexguid.scp.problem import ProgramSize
-from convexguid.sim.tracking import Sensors
+from convexguid.sim.tracking import DisturbanceTorque, Sensors
 from convexguid.solution import Solution, Trajectory, make_solution
 from convexguid.verify import ConstraintCheck, Verification
 
@@ -39,12 +39,35 @@ ENVELOPE_STRIDE = 10
 """Monte Carlo histories are kept every this many steps (for the envelope plots)."""
 
 
+def load_nominal_spec(spec):
+    """The nominal's problem, with ``set`` applied and the final time from ``nominal.tf_s`` if given."""
+    from convexguid.spec import load_problem
+
+    path = resolve_nominal_path(spec)
+    nominal_spec = load_problem(path, spec.nominal.set)
+    if spec.nominal.tf_s is None:
+        return nominal_spec
+    timed = [f"boundary.tf_s={spec.nominal.tf_s!r}"]
+    if getattr(nominal_spec.boundary, "tf_from", None) is not None:
+        timed.append("boundary.tf_from=null")
+    return load_problem(path, [*spec.nominal.set, *timed])
+
+
+def forbidden_angles_deg(nominal_spec, x: np.ndarray) -> dict[str, tuple[float, float]]:
+    """Smallest Euler-axis angle (deg) of the MRP history ``x`` to each forbidden attitude of the nominal's
+    problem, with its bound: ``{name: (smallest, min_angle_deg)}`` (empty if the problem has none)."""
+    out = {}
+    for f in getattr(nominal_spec, "forbidden", ()):
+        angles = np.degrees(quat_angle_between(mrp_to_quat(x[:, :3]), np.asarray(f.quaternion, dtype=float)))
+        out[f.name] = (float(angles.min()), float(f.min_angle_deg))
+    return out
+
+
 def build_scenario(spec) -> tuple[Scenario | None, Solution]:
     """The scenario of ``spec`` and the nominal's solution (scenario None if the nominal is not verified)."""
     from convexguid.api import solve
-    from convexguid.spec import load_problem
 
-    nominal_spec = load_problem(resolve_nominal_path(spec), spec.nominal.set)
+    nominal_spec = load_nominal_spec(spec)
     nominal_solution = solve(nominal_spec)
     if not nominal_solution.ok:
         return None, nominal_solution
@@ -58,9 +81,10 @@ def build_scenario(spec) -> tuple[Scenario | None, Solution]:
         u_max=np.broadcast_to(np.asarray(sc.torque_max_Nm, dtype=float), 3).copy(),
         target=np.concatenate([target_sigma, final.rate_radps]),
         sensors=Sensors(np.radians(spec.sensors.euler_std_deg), np.radians(spec.sensors.rate_std_degps)),
-        disturbance_std_Nm=spec.disturbance.torque_std_Nm,
+        disturbance=DisturbanceTorque(spec.disturbance.model, spec.disturbance.torque_std_Nm),
         lpmpc=LpmpcSettings(s.nodes, s.check_interval_s, s.threshold_mrp, np.radians(s.threshold_rate_degps),
-                            box_constrained=s.correction == "box_qp", backend=s.backend),
+                            box_constrained=s.correction == "box_qp", backend=s.backend,
+                            least_change=s.correction == "least_change"),
         lqr_q=spec.lqr.q, lqr_r=tuple(spec.lqr.r))
     return scenario, nominal_solution
 
@@ -86,6 +110,7 @@ def simulate_lpmpc(spec) -> Solution:
     flights = fly_all(scenario, x0, spec.simulation.seed)
     runs = tuple(_controller_run(f, law, scenario.target) for f, law in flights)
     lpmpc_flight, tracker = flights[0]
+    forbidden = forbidden_angles_deg(load_nominal_spec(spec), lpmpc_flight.x)
     checks = tracker.checks
     monte_carlo, envelopes = _monte_carlo(spec, scenario) if spec.monte_carlo is not None else (None, {})
     update_times = update_times_ms(scenario, spec.timing_nodes) if spec.timing_nodes else None
@@ -97,8 +122,10 @@ def simulate_lpmpc(spec) -> Solution:
         prediction_time_median_ms=_median_ms([c.prediction_time_s for c in checks]),
         correction_time_median_ms=_median_ms([c.correction_time_s for c in checks if c.corrected]),
         integration_time_median_ms=_median_ms([c.integration_time_s for c in checks if c.miss is not None]),
-        update_time_ms=update_times, monte_carlo=monte_carlo)
-    verification = _verification(spec, nominal, runs[0], lpmpc_flight.t.size)
+        update_time_ms=update_times, monte_carlo=monte_carlo,
+        maneuver_time_s=float(scenario.nominal.t[-1] - scenario.nominal.t[0]),
+        min_forbidden_angle_deg=min((a for a, _ in forbidden.values()), default=None))
+    verification = _verification(spec, nominal, runs[0], lpmpc_flight.t.size, forbidden)
     status = "converged" if verification.passed else "unverified"
     message = (f"{tracker.corrections} LPMPC corrections in {len(checks)} checks; final attitude error "
                f"{runs[0].final_angle_error_deg:.3g} deg, rate error {runs[0].final_rate_error_degps:.3g} deg/s")
@@ -126,15 +153,20 @@ def _controller_run(flight, law, target: np.ndarray) -> ControllerRun:
                          len(law.checks) if corrections is not None else None)
 
 
-def _verification(spec, nominal: Solution, lpmpc: ControllerRun, grid_points: int) -> Verification:
-    """The nominal's dense checks (prefixed ``nominal_``) and LPMPC's terminal errors against ``checks``."""
-    checks = tuple(ConstraintCheck(f"nominal_{c.name}", c.worst, c.bound, c.sense)
-                   for c in nominal.verification.checks)
-    checks += (ConstraintCheck("lpmpc_final_angle_error_deg", lpmpc.final_angle_error_deg,
-                               spec.checks.final_angle_deg, "max"),
-               ConstraintCheck("lpmpc_final_rate_error_degps", lpmpc.final_rate_error_degps,
-                               spec.checks.final_rate_degps, "max"))
-    passed = nominal.verification.passed and all(c.violation == 0 for c in checks[-2:])
+def _verification(spec, nominal: Solution, lpmpc: ControllerRun, grid_points: int,
+                  forbidden: dict[str, tuple[float, float]]) -> Verification:
+    """The nominal's dense checks (prefixed ``nominal_``); LPMPC's terminal errors against ``checks`` and its
+    flight's distance to each forbidden attitude of the nominal's problem."""
+    nominal_checks = tuple(ConstraintCheck(f"nominal_{c.name}", c.worst, c.bound, c.sense)
+                           for c in nominal.verification.checks)
+    flight_checks = (ConstraintCheck("lpmpc_final_angle_error_deg", lpmpc.final_angle_error_deg,
+                                     spec.checks.final_angle_deg, "max"),
+                     ConstraintCheck("lpmpc_final_rate_error_degps", lpmpc.final_rate_error_degps,
+                                     spec.checks.final_rate_degps, "max"))
+    flight_checks += tuple(ConstraintCheck(f"lpmpc_forbidden_{name}_deg", smallest, bound, "min")
+                           for name, (smallest, bound) in forbidden.items())
+    checks = nominal_checks + flight_checks
+    passed = nominal.verification.passed and all(c.violation == 0 for c in flight_checks)
     return Verification(grid_points=grid_points, checks=checks,
                         final_state_error=float(np.hypot(np.radians(lpmpc.final_angle_error_deg),
                                                          np.radians(lpmpc.final_rate_error_degps))),

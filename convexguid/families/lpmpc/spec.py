@@ -17,24 +17,33 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from convexguid.spec.common import (
+    InputLink,
     NonEmptyStr,
     NonNegativeFloat,
     PositiveFloat,
     ProblemBase,
     Reference,
+    ResultLink,
     SpecModel,
     Vector3,
+    spec_error,
 )
 
 
 class NominalSource(SpecModel):
-    """``problem``: the nominal's problem file (relative to this file); ``set``: overrides applied to it."""
+    """``problem``: the nominal's problem file (relative to this file); ``set``: overrides applied to it.
+
+    ``tf_from``: the nominal's final time is a figure of another case's result (``{problem, figure}``, resolved
+    by ``convexguid validate`` into ``tf_s``, which then replaces the nominal's own ``boundary.tf_s`` or
+    ``boundary.tf_from``)."""
 
     problem: NonEmptyStr
     set: list[str] = Field(default_factory=list)
+    tf_s: PositiveFloat | None = None
+    tf_from: ResultLink | None = None
 
 
 class TrackingSimulation(SpecModel):
@@ -45,8 +54,10 @@ class TrackingSimulation(SpecModel):
 
 
 class Disturbance(SpecModel):
-    """Gaussian torque per axis, drawn every step: ``torque_std_Nm`` (0: none)."""
+    """``gaussian``: a torque per axis drawn every step with standard deviation ``torque_std_Nm`` (0: none);
+    ``guo2011``: Guo, Li, Ma's deterministic Sec. 4 torque (``torque_std_Nm`` unused)."""
 
+    model: Literal["gaussian", "guo2011"] = "gaussian"
     torque_std_Nm: NonNegativeFloat = 0.05
 
 
@@ -67,13 +78,14 @@ class InitialError(SpecModel):
 class LpmpcSettingsSpec(SpecModel):
     """The LPMPC law: ``nodes`` LGR points, the update-check interval, thresholds on the predicted terminal
     deviation (MRP, dimensionless; rate, deg/s), and the correction (``closed_form``: eqs. 45-56;
-    ``box_qp``: the same energy objective with the torque box at the nodes, solved by ``backend``)."""
+    ``box_qp``: the same energy objective with the torque box at the nodes, solved by ``backend``;
+    ``least_change``: the smallest correction, for a nominal whose path constraints are active)."""
 
     nodes: Annotated[int, Field(ge=3, le=40)] = 8
     check_interval_s: PositiveFloat = 2.0
     threshold_mrp: PositiveFloat = 0.01
     threshold_rate_degps: PositiveFloat = 0.005
-    correction: Literal["closed_form", "box_qp"] = "closed_form"
+    correction: Literal["closed_form", "box_qp", "least_change"] = "closed_form"
     backend: str = "clarabel"
 
 
@@ -81,7 +93,7 @@ class LqrSettingsSpec(SpecModel):
     """Weights :math:`Q = q I_6`, :math:`R = r I_3` of the LQR baselines, one tracking and one direct law per r."""
 
     q: PositiveFloat = 100.0
-    r: Annotated[list[PositiveFloat], Field(min_length=1)] = Field(default_factory=lambda: [0.01, 0.1])
+    r: list[PositiveFloat] = Field(default_factory=lambda: [0.01, 0.1])
 
 
 class MonteCarlo(SpecModel):
@@ -149,3 +161,18 @@ class LpmpcProblem(ProblemBase):
     """LGR point counts whose update time (prediction + correction) is measured on the single case."""
     paper: PaperTables | None = None
     reference: Reference | None = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> LpmpcProblem:
+        if self.monte_carlo is not None and not self.lqr.r:
+            raise spec_error("is empty, but the Monte Carlo flies LQR tracking with its first weight",
+                             "give at least one r, e.g. [0.01]", key=("lqr", "r"), value=[])
+        if self.nominal.tf_s is not None and self.nominal.tf_from is not None:
+            raise spec_error("{here}nominal.tf_s and {here}nominal.tf_from are both set", "give one of them",
+                             key=("nominal", "tf_from"), value=self.nominal.tf_from.model_dump())
+        return self
+
+    def input_links(self) -> tuple[InputLink, ...]:
+        """``nominal.tf_from`` while unresolved: it gives ``nominal.tf_s``."""
+        link = self.nominal.tf_from
+        return () if link is None else (InputLink("nominal.tf_s", "nominal.tf_from", link),)
