@@ -229,3 +229,20 @@ def test_report_code_names_no_problem():
     source = Path(comparisons.__file__).read_text()
     for path in MULTICONE + GUO:
         assert load_problem(path).name not in source
+
+
+def test_a_tracked_plan_is_a_row_with_its_own_sentence():
+    """The LPMPC-flown plan (role ``tracked``) comes last and is set against the controller in the text."""
+    ctrl = load_problem(GUO[0])
+    track = load_problem(PROBLEMS / "guo2011_lpmpc_track.yaml", ["nominal.tf_from=null", "nominal.tf_s=196.8"])
+    results = [_result(track, _solution(track, wall_time_s=5.0, maneuver_time_s=196.8, lpmpc_energy_N2m2s=1.866,
+                                        min_forbidden_angle_deg=10.69, nominal_problem="n", nominal_status="ok")),
+               _result(ctrl, _solution(ctrl, wall_time_s=0.4, maneuver_time_01deg_s=196.8, energy_N2m2s=11.52,
+                                       min_theta_b_deg=23.52))]
+    lines = comparison_sections(results)
+    rows = _rows(lines)
+    assert [r[0] for r in rows][-1].startswith("SCP minimum-energy plan flown by LPMPC")
+    assert rows[-1][1:4] == ["196.80", "1.866", "10.69"]
+    text = "\n".join(lines)
+    assert "uses 1.866 N^2 m^2 s, 83.8% less than the controller, and keeps theta_b at 10.69 deg" in text
+    assert "would need a tracking loop" not in text

@@ -380,10 +380,11 @@ class ComparisonEntry(SpecModel):
         Id of the table (e.g. ``multicone``, ``forbidden_attitude``); checked by the validation runner.
     label : str
         Row label (the ``method`` column).
-    role : {"baseline", "min_time", "min_energy"} or None
+    role : {"baseline", "min_time", "min_energy", "tracked"} or None
         What the row stands for in the sentences under the table: ``baseline`` the method the others are
         set against (e.g. the paper's own planner or controller), ``min_time`` / ``min_energy`` the
-        minimum-time / minimum-energy plan. At most one row of a table per role.
+        minimum-time / minimum-energy plan, ``tracked`` a plan flown closed loop by a tracking law. At most
+        one row of a table per role.
     figures : dict of str to str or None
         Summary figures filling the table's columns where the column's default figure does not apply,
         by column id (e.g. ``{maneuver_time: maneuver_time_01deg_s}`` for a simulated controller).
@@ -391,7 +392,7 @@ class ComparisonEntry(SpecModel):
 
     table: NonEmptyStr
     label: NonEmptyStr
-    role: Literal["baseline", "min_time", "min_energy"] | None = None
+    role: Literal["baseline", "min_time", "min_energy", "tracked"] | None = None
     figures: dict[str, NonEmptyStr] | None = None
 
 
