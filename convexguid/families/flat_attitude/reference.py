@@ -88,8 +88,8 @@ def _cone_function(ca: Any, body_axis: np.ndarray, inertial_dir: np.ndarray) -> 
     return ca.Function("cone_cosine", [z], [value])
 
 
-def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray,
-                              tol: float = 1e-8) -> ReferenceResult:
+def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray, tol: float = 1e-8,
+                              nodes_only: bool = False, expand: bool = False) -> ReferenceResult:
     """Solve the flat-attitude transcription of ``problem`` with CasADi + IPOPT from ``x0``.
 
     The pointwise maps (torque, cone cosine) are CasADi ``SX`` functions of one node,
@@ -106,6 +106,12 @@ def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray,
         Initial guess, ``3 (N + 1)`` node-major Euler angles, rad.
     tol : float, optional
         IPOPT's ``tol`` (scaled NLP error), default ``1e-8``.
+    nodes_only : bool, optional
+        Impose the torque box and the cones at the nodes only (the paper's NLP), not also at the
+        check points and refinement points the SCP imposes them at.
+    expand : bool, optional
+        Let CasADi expand the graph to ``SX`` before IPOPT (``expand`` option of ``nlpsol``): slower to
+        set up, faster to evaluate; with exact Hessians either way.
 
     Returns
     -------
@@ -130,7 +136,7 @@ def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray,
     weights = 0.5 * (problem.tf - problem.t0) * np.asarray(problem.grid.quadrature_weights)
     objective = ca.mtimes(ca.sum1(u * u), ca.DM(weights))
 
-    path = ca.DM(np.asarray(problem.path_interpolation).T)
+    path = ca.DM(np.eye(n1) if nodes_only else np.asarray(problem.path_interpolation).T)
     n_path = path.shape[1]
     z_path = ca.mtimes(z, path)
     linear = FlatAttitudeProgram(problem).linear_constraints()
@@ -143,7 +149,7 @@ def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray,
     lbg = np.concatenate([np.broadcast_to(lo, (expr.numel(),)) for expr, lo, _ in groups])
     ubg = np.concatenate([np.broadcast_to(hi, (expr.numel(),)) for expr, _, hi in groups])
 
-    options = {"ipopt.print_level": 0, "ipopt.tol": tol, "ipopt.sb": "yes", "print_time": False}
+    options = {"ipopt.print_level": 0, "ipopt.tol": tol, "ipopt.sb": "yes", "print_time": False, "expand": expand}
     solver = ca.nlpsol("flat_attitude_ipopt", "ipopt", {"x": x, "f": objective, "g": g}, options)
     setup = time.perf_counter() - start
 
