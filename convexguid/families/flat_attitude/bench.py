@@ -91,22 +91,33 @@ def _scp_row(nodes: int, backend: str, program: FlatAttitudeProgram, settings: S
                     r.solver_time_s, r.overhead_time_s, ok=r.status == "converged", message=r.message)
 
 
-def _ipopt_row(nodes: int, problem: FlatAttitudeProblem, x0: np.ndarray, repeat: int) -> BenchRow:
-    """Fastest of ``repeat`` IPOPT solves; the setup time is the fastest model construction."""
+def _ipopt_row(nodes: int, label: str, problem: FlatAttitudeProblem, x0: np.ndarray, repeat: int,
+               nodes_only: bool) -> BenchRow:
+    """Fastest of ``repeat`` IPOPT solves; the setup time is the fastest model construction.
+
+    On the nodes-only NLP the CasADi graph is expanded to SX (the fastest evaluation, exact Hessian);
+    with check points it stays an MX graph of SX node functions (expanding it takes minutes at N = 128).
+    """
+    method = f"ipopt {label}"
     try:
-        runs = [solve_flat_attitude_ipopt(problem, x0, IPOPT_TOLERANCE) for _ in range(max(1, repeat))]
+        runs = [solve_flat_attitude_ipopt(problem, x0, IPOPT_TOLERANCE, nodes_only=nodes_only, expand=nodes_only)
+                for _ in range(max(1, repeat))]
     except Exception as exc:  # noqa: BLE001 - report and go on
-        return BenchRow(nodes, "ipopt", f"failed: {one_line(f'{type(exc).__name__}: {exc}')}",
+        return BenchRow(nodes, method, f"failed: {one_line(f'{type(exc).__name__}: {exc}')}",
                         message=f"{type(exc).__name__}: {exc}")
     best = min(runs, key=lambda r: r.wall_time_s)
-    return BenchRow(nodes, "ipopt", best.status, best.objective, best.iterations, best.wall_time_s,
+    return BenchRow(nodes, method, best.status, best.objective, best.iterations, best.wall_time_s,
                     setup_s=min(r.setup_time_s for r in runs), ok=best.success,
                     message="" if best.success else f"IPOPT returned {best.status}")
 
 
+NLP_VARIANTS = (("[nodes]", True), ("[+checks]", False))
+"""The two NLPs benched: path constraints at the nodes only (the paper's), and also at the check points (ours)."""
+
+
 def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, backends: Sequence[str],
                 with_ipopt: bool) -> list[BenchRow]:
-    """Benchmark rows of one grid size: one per SCP backend, then IPOPT (if ``with_ipopt``).
+    """Benchmark rows of one grid size, for each NLP variant: one per SCP backend, then IPOPT (if ``with_ipopt``).
 
     Parameters
     ----------
@@ -124,23 +135,26 @@ def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, back
     Returns
     -------
     list of BenchRow
-        With ``ratio`` = IPOPT solve time / SCP wall time on the converged SCP rows when IPOPT succeeded.
+        With ``ratio`` = IPOPT solve time / SCP wall time on the converged SCP rows of the same NLP when IPOPT
+        succeeded.
     """
-    spec = load_problem(problem_path, [f"discretization.nodes={nodes}"])
-    problem = build_problem(spec)
-    program = FlatAttitudeProgram(problem)
-    x0 = program.initial_guess()
-    s = spec.solver
-    rows = []
-    for backend in backends:
-        settings = SCPSettings.from_spec(s, backend=backend)
-        rows.append(_scp_row(nodes, backend, program, settings, x0, repeat))
-    if not with_ipopt:
-        return rows
-    ipopt = _ipopt_row(nodes, problem, x0, repeat)
-    if ipopt.ok and ipopt.wall_s is not None:
-        rows = [replace(r, ratio=ipopt.wall_s / r.wall_s) if r.ok and r.wall_s else r for r in rows]
-    return [*rows, ipopt]
+    rows: list[BenchRow] = []
+    for label, nodes_only in NLP_VARIANTS:
+        overrides = [f"discretization.nodes={nodes}"] + (["discretization.check_points_per_interval=0"]
+                                                         if nodes_only else [])
+        spec = load_problem(problem_path, overrides)
+        problem = build_problem(spec)
+        program = FlatAttitudeProgram(problem)
+        x0 = program.initial_guess()
+        scp = [_scp_row(nodes, f"{backend} {label}", program, SCPSettings.from_spec(spec.solver, backend=backend),
+                        x0, repeat) for backend in backends]
+        if with_ipopt:
+            ipopt = _ipopt_row(nodes, label, problem, x0, repeat, nodes_only)
+            if ipopt.ok and ipopt.wall_s is not None:
+                scp = [replace(r, ratio=ipopt.wall_s / r.wall_s) if r.ok and r.wall_s else r for r in scp]
+            scp.append(ipopt)
+        rows += scp
+    return rows
 
 
 def _text_table(rows: Sequence[BenchRow]) -> str:
@@ -172,12 +186,14 @@ def _notes(rows: Sequence[BenchRow]) -> list[str]:
     """Per grid: the largest relative gap between a converged SCP objective and IPOPT's; then failures."""
     lines = []
     for n in dict.fromkeys(r.nodes for r in rows):
-        solved = [r for r in rows if r.nodes == n and r.ok and r.objective is not None]
-        ipopt = [r.objective for r in solved if r.method == "ipopt"]
-        scp = [r.objective for r in solved if r.method != "ipopt"]
-        if ipopt and scp:
-            gap = max(abs(o - ipopt[0]) for o in scp) / abs(ipopt[0])
-            lines.append(f"N = {n}: largest relative objective gap, converged SCP vs IPOPT: {gap:.2e}")
+        for label, _ in NLP_VARIANTS:
+            solved = [r for r in rows if r.nodes == n and r.ok and r.objective is not None
+                      and r.method.endswith(label)]
+            ipopt = [r.objective for r in solved if r.method.startswith("ipopt")]
+            scp = [r.objective for r in solved if not r.method.startswith("ipopt")]
+            if ipopt and scp:
+                gap = max(abs(o - ipopt[0]) for o in scp) / abs(ipopt[0])
+                lines.append(f"N = {n} {label}: largest relative objective gap, converged SCP vs IPOPT: {gap:.2e}")
     for r in rows:
         if not r.ok:
             status = "failed" if r.status.startswith("failed") else r.status
@@ -199,13 +215,15 @@ def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLi
         f"- Date: {when}",
         f"- Command: `{command}`",
         "",
-        "Both methods solve the identical transcription (mapped Chebyshev, torque box and keep-out cones "
-        "at the nodes and the check points between them) from the same initial guess; the path-constraint "
-        "refinement of `convexguid solve` is not run. Times are the best of the repeats, in seconds. "
+        "Both methods solve the identical transcription (mapped Chebyshev) from the same initial guess, in two "
+        "variants: `[nodes]`, the torque box and the keep-out cones at the nodes only (the paper's NLP), and "
+        "`[+checks]`, also at the check points between them (what `convexguid solve` imposes); the dense-check "
+        "repairs of `convexguid solve` are not run. Times are the best of the repeats, in seconds. "
         "For the SCP, `wall s` = `convexify s` (maps and Jacobians) + `solver s` (convex backend) "
-        "+ `overhead s` (assembly, bookkeeping). For IPOPT (CasADi, exact Hessian, MUMPS, "
-        f"tol = {IPOPT_TOLERANCE:g}), `wall s` is the solve call only and `setup s` builds the CasADi model. "
-        "`IPOPT/SCP time` = IPOPT wall time / SCP wall time, converged runs only (above 1: SCP faster).",
+        "+ `overhead s` (assembly, bookkeeping), setup included. For IPOPT (CasADi, exact Hessian, MUMPS, "
+        f"tol = {IPOPT_TOLERANCE:g}; the `[nodes]` graph expanded to SX), `wall s` is the solve call only and "
+        "`setup s` builds the CasADi model. `IPOPT/SCP time` = IPOPT wall time / SCP wall time on the same NLP, "
+        "converged runs only (above 1: SCP faster).",
     ]
     if ipopt_note:
         header += ["", ipopt_note]
