@@ -39,3 +39,34 @@ def rigid_body_rhs(inertia: np.ndarray, torque: Callable[[float], np.ndarray]
         return np.concatenate([quat_derivative(q, omega), omega_dot])
 
     return rhs
+
+
+def rigid_body_rhs_fast(inertia: np.ndarray, torque: Callable[[float], np.ndarray]
+                        ) -> Callable[[float, np.ndarray], np.ndarray]:
+    """:func:`rigid_body_rhs` written out for one state: the same equations, a fraction of the cost.
+
+    The seven state components, the torque and the 3x3 products with the inertia and its inverse
+    are plain floats; the only allocation per call is the result. Made for an integrator's inner
+    loop (a dense check calls it thousands of times), where NumPy's per-call overhead on length-3
+    arrays dominated. ``torque(t)`` returns three numbers (an array or a sequence). Agrees with
+    :func:`rigid_body_rhs` to rounding.
+    """
+    (i11, i12, i13), (i21, i22, i23), (i31, i32, i33) = np.asarray(inertia, dtype=float).tolist()
+    (j11, j12, j13), (j21, j22, j23), (j31, j32, j33) = np.linalg.inv(inertia).tolist()
+
+    def rhs(t: float, state: np.ndarray) -> np.ndarray:
+        x, y, z, w, p, q, r = state.tolist()
+        u = torque(t)
+        u1, u2, u3 = u.tolist() if isinstance(u, np.ndarray) else u
+        h1 = i11 * p + i12 * q + i13 * r  # I omega
+        h2 = i21 * p + i22 * q + i23 * r
+        h3 = i31 * p + i32 * q + i33 * r
+        e1 = u1 - (q * h3 - r * h2)  # u - omega x I omega
+        e2 = u2 - (r * h1 - p * h3)
+        e3 = u3 - (p * h2 - q * h1)
+        return np.array([0.5 * (w * p + (y * r - z * q)), 0.5 * (w * q + (z * p - x * r)),
+                         0.5 * (w * r + (x * q - y * p)), -0.5 * (x * p + y * q + z * r),
+                         j11 * e1 + j12 * e2 + j13 * e3, j21 * e1 + j22 * e2 + j23 * e3,
+                         j31 * e1 + j32 * e2 + j33 * e3])
+
+    return rhs

@@ -63,13 +63,16 @@ from __future__ import annotations
 
 import math
 import time
+from bisect import bisect_right
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from convexguid.checks import inertia_matrix, positive, unit_vector
 from convexguid.dynamics.rigid_body import euler_torque
+from convexguid.dynamics.torque import TorqueCommand
 from convexguid.errors import ConvexGuidError, SpecError
 from convexguid.geometry import PointingCone, eigenaxis_path, eigenaxis_rotation
 from convexguid.rotations import axis_angle_to_quat, quat_multiply, quat_rotate, quat_to_dcm
@@ -388,8 +391,53 @@ class PathTransferResult:
         return tuple(o[0] for o in out) if np.ndim(t) == 0 else out
 
     def torque_at(self, t: float) -> NDArray:
-        """Closed-form planned torque at one time (N m), e.g. for :func:`convexguid.verify.propagate_attitude`."""
-        return self.sample(float(t))[2]
+        r"""Closed-form planned torque at one time (N m), as :meth:`sample` gives it, in plain float arithmetic.
+
+        On a leg about body axis :math:`e`, :math:`u = \ddot\theta\, I e + \dot\theta^2\, e \times I e`
+        (law R2), with the leg's :math:`I e` and :math:`e \times I e` computed once (:attr:`_torque_legs`).
+        """
+        t = float(t)
+        legs = self._torque_legs
+        if not legs:
+            return np.zeros(3)
+        k = min(max(bisect_right(self._leg_starts, t) - 1, 0), len(legs) - 1)
+        start, duration, ramp_time, rate_coast, accel, inertia_axis, gyro = legs[k]
+        local = min(max(t - start, 0.0), duration)
+        if local < ramp_time:
+            rate, acc = accel * local, accel
+        elif local > duration - ramp_time:
+            rate, acc = accel * (duration - local), -accel
+        else:
+            rate, acc = rate_coast, 0.0
+        if t < 0.0 or t > self.maneuver_time_s:
+            acc = 0.0
+        rate2 = rate * rate
+        return np.array([acc * a + rate2 * g for a, g in zip(inertia_axis, gyro, strict=True)])
+
+    @cached_property
+    def _torque_legs(self) -> tuple[tuple, ...]:
+        r"""Per leg: start, duration, ramp time, coast rate, ramp acceleration, :math:`Ie`, :math:`e\times Ie`.
+
+        The ramp and coast values as :func:`_trapezoid` forms them.
+        """
+        legs = []
+        for s in self.segments:
+            ramp_time = s.ramp_fraction * s.duration_s
+            rate = s.angle_rad / (s.duration_s * (1 - s.ramp_fraction)) if s.duration_s > 0 else s.angle_rad
+            accel = rate / ramp_time if ramp_time > 0 else rate
+            inertia_axis = self.inertia @ s.axis_body
+            legs.append((s.t_start_s, s.duration_s, ramp_time, rate, accel, tuple(inertia_axis.tolist()),
+                         tuple(np.cross(s.axis_body, inertia_axis).tolist())))
+        return tuple(legs)
+
+    @cached_property
+    def _leg_starts(self) -> list[float]:
+        return [s.t_start_s for s in self.segments]
+
+    def torque_command(self) -> TorqueCommand:
+        """The planned torque for :func:`convexguid.verify.propagate_attitude`: :meth:`torque_at`, with the
+        times where it jumps (:attr:`breakpoints_s`) and :meth:`sample` for many times."""
+        return TorqueCommand(self.torque_at, self.breakpoints_s, sample=lambda t: self.sample(t)[2])
 
     @property
     def breakpoints_s(self) -> NDArray:

@@ -54,6 +54,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.dynamics.rigid_body import euler_torque
+from convexguid.dynamics.torque import LinearTorque
 from convexguid.geometry import PointingCone, eigenaxis_rotation
 from convexguid.rotations import axis_angle_to_quat, quat_multiply, quat_rate_matrix, skew
 from convexguid.scp.problem import (
@@ -411,11 +412,6 @@ class QuaternionProgram:
         return tuple(blocks)
 
     # --- reading a solution ---
-    def torque_command(self, x: np.ndarray):
-        """Linear interpolation of the node torques (the transcription's control model)."""
-        t, u = self.times(x), self.nodes(x)[:, NX:]
-
-        def torque(time: float) -> np.ndarray:
-            return np.array([np.interp(time, t, u[:, i]) for i in range(3)])
-
-        return torque
+    def torque_command(self, x: np.ndarray) -> LinearTorque:
+        """Linear interpolation of the node torques (the transcription's control model); kinks at the nodes."""
+        return LinearTorque(self.times(x), self.nodes(x)[:, NX:])

@@ -1,7 +1,7 @@
 """Plan, verify and summarise a ``quaternion_attitude`` problem: SCP (minimum time or energy) or path transfer.
 
 The SCP plans on the nodes of :class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`;
-the plan's torque (linear between nodes) is then integrated with SciPy and every cone,
+the plan's torque (linear between nodes) is then integrated with SciPy, node to node, and every cone,
 the forbidden attitudes, the rate and torque boxes are checked on a dense grid. Where
 the path cuts a constraint between nodes, the node constraints are tightened by the
 amount seen (cone and forbidden-attitude margin, rate bound) and the problem is solved
@@ -16,6 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from convexguid.dynamics.torque import TorqueCommand
 from convexguid.families.quaternion_attitude.figures import ConeGeometry, QuaternionAttitudeFigures
 from convexguid.families.quaternion_attitude.program import (
     AttitudeCase,
@@ -68,9 +69,13 @@ def path_transfer_problem(case: AttitudeCase) -> PathTransferProblem:
                                float(np.min(case.torque_max)), case.rate_max)
 
 
-def verify_plan(case: AttitudeCase, t_end: float, torque: Callable[[float], np.ndarray], settings,
-                max_step: float) -> tuple[Verification, AttitudeTrack]:
-    """Integrate the planned torque and check every constraint of the case on a dense grid."""
+def verify_plan(case: AttitudeCase, t_end: float, torque: TorqueCommand | Callable[[float], np.ndarray], settings,
+                max_step: float = np.inf) -> tuple[Verification, AttitudeTrack]:
+    """Integrate the planned torque and check every constraint of the case on a dense grid.
+
+    The torque is integrated piece by piece between its breakpoints (see
+    :func:`~convexguid.verify.propagate_attitude`); ``max_step`` is only for a torque without them.
+    """
     t_grid = np.linspace(case.t0, t_end, settings.grid_points)
     track = propagate_attitude(case.inertia, torque, case.q0, case.w0, t_grid, settings.rtol, settings.atol,
                                max_step=max_step)
@@ -92,8 +97,8 @@ def verify_plan(case: AttitudeCase, t_end: float, torque: Callable[[float], np.n
 class QuaternionChecker:
     """The family's side of the engine's check-repair loop (:mod:`convexguid.scp.verified`).
 
-    ``check`` integrates the planned torque (linear between nodes) and checks every cone, the
-    forbidden attitudes, the rate and torque boxes and the final state on a dense grid. ``repair``
+    ``check`` integrates the planned torque (linear between nodes, integrated node to node) and checks
+    every cone, the forbidden attitudes, the rate and torque boxes and the final state on a dense grid. ``repair``
     tightens the node constraints by what the check saw between nodes: the cone and forbidden-attitude
     margin, and the rate bound, each by a margin that grows every round that does not clear it
     (:func:`~convexguid.scp.verified.grown_margin`). The tightened program starts from the last plan;
@@ -105,8 +110,7 @@ class QuaternionChecker:
 
     def check(self, program: QuaternionProgram, x: np.ndarray) -> Check:
         tf = program.final_time(x)
-        verification, track = verify_plan(self.case, self.case.t0 + tf, program.torque_command(x), self.settings,
-                                          max_step=tf / program.K / 4)
+        verification, track = verify_plan(self.case, self.case.t0 + tf, program.torque_command(x), self.settings)
         return Check(verification, track)
 
     def repair(self, program: QuaternionProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None:
@@ -244,10 +248,8 @@ def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | Non
 
 def _solve_path_transfer(case: AttitudeCase, spec, start: float, figures: QuaternionAttitudeFigures) -> Solution:
     plan = plan_path_transfer(path_transfer_problem(case))
-    breaks = plan.breakpoints_s
-    step = float(np.min(np.diff(breaks))) / 4 if breaks.size > 1 else plan.maneuver_time_s / 200
-    verification, track = verify_plan(case, case.t0 + plan.maneuver_time_s, plan.torque_at, spec.verification,
-                                      max_step=max(step, 1e-3))
+    verification, track = verify_plan(case, case.t0 + plan.maneuver_time_s, plan.torque_command(),
+                                      spec.verification)
     figures = replace(figures, maneuver_time_s=plan.maneuver_time_s, planning_time_s=plan.planning_time_s,
                       energy=_energy(track), min_cone_margin_deg=cone_margin_deg(case, track),
                       actions=tuple(f"{case.cones[i].name}: {a}" for i, a in enumerate(plan.actions)))
