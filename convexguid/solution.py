@@ -202,15 +202,16 @@ def planned_solution(spec, outcome: VerifiedSolve, started: float, size: Program
                      figures: Figures | None = None) -> Solution:
     """The :class:`Solution` of a plan that went through the engine's check-repair loop.
 
-    Status, message, objective, iterations, history, timing, the dense verification and the
-    repair rounds come from ``outcome``; the family adds its trajectories and figures.
+    Status, message, objective, iterations, history, timing, the solver as the engine resolved it
+    (e.g. ``auto -> daqp (condensed)``), the dense verification and the repair rounds come from
+    ``outcome``; the family adds its trajectories and figures.
     """
     result = outcome.result
     return make_solution(spec, status=outcome.status, message=outcome.message, started=started,
                          objective=result.objective, iterations=result.iterations, size=size,
                          verification=outcome.check.verification if outcome.check is not None else None,
                          history=result.history, nodes=nodes, dense=dense, figures=figures,
-                         timing=result.timing(), repair_rounds=outcome.rounds)
+                         timing=result.timing(), repair_rounds=outcome.rounds, solver=result.solver or None)
 
 
 def _finite(value: float | None) -> float | None:

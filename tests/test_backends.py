@@ -4,7 +4,16 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from convexguid.backends import Cones, ConicProgram, available_backends, make_backend
+from convexguid.backends import (
+    BackendResult,
+    Cones,
+    ConicProgram,
+    FallbackBackend,
+    auto_backend,
+    available_backends,
+    make_backend,
+)
+from convexguid.backends.dense import DaqpBackend
 from convexguid.errors import BackendError
 
 
@@ -21,7 +30,7 @@ def small_qp(shift: float = 0.0) -> ConicProgram:
     return ConicProgram(P, q, A, b, Cones(zero=1, nonneg=1))
 
 
-@pytest.mark.parametrize("name", ["clarabel", "osqp", "qpsolvers:clarabel"])
+@pytest.mark.parametrize("name", ["clarabel", "osqp", "qpsolvers:clarabel", "daqp", "auto"])
 def test_backends_agree_on_a_qp_with_known_solution(name):
     backend = make_backend(name, small_qp(), tolerance=1e-9)
     res = backend.solve()
@@ -69,3 +78,119 @@ def test_osqp_refuses_second_order_cones():
         make_backend("osqp", prog)
     res = make_backend("clarabel", prog).solve()
     assert res.status == "optimal" and res.x[0] == pytest.approx(0.0, abs=1e-6)
+
+
+# --- the dense backend and the auto choice -------------------------------------------------------
+
+def penalized_qp(seed: int, penalty: float = 1.0) -> ConicProgram:
+    """A random program shaped like an SCP subproblem: a strictly convex QP in 6 core variables with
+    equalities, hard inequalities, a box, and penalty slacks, 4 on one row each and 2 on opposite rows.
+
+    Variables ``[x (6), s_hinge (4), t_abs (2)]``. Rows: zero cone ``E x = f`` (2); nonnegative cone
+    ``G x <= h`` (2), ``a_i'x - s_i <= b_i`` (4), ``c_j'x - t_j <= -e_j`` and ``-c_j'x - t_j <= e_j`` (2 + 2),
+    ``-s, -t <= 0`` (6), ``|x| <= 1.5`` (12). With ``penalty`` 1 some penalties are paid at the optimum.
+    """
+    rng = np.random.default_rng(seed)
+    n, n_h, n_a = 6, 4, 2
+    L = rng.normal(size=(n, n))
+    H = L @ L.T + 0.1 * np.eye(n)
+    E, G = rng.normal(size=(2, n)), rng.normal(size=(2, n))
+    Ah, Ac = rng.normal(size=(n_h, n)), rng.normal(size=(n_a, n))
+    bh, e = rng.normal(size=n_h), rng.normal(size=n_a)
+    N = n + n_h + n_a
+    hinge = np.hstack([Ah, -np.eye(n_h), np.zeros((n_h, n_a))])
+    plus = np.hstack([Ac, np.zeros((n_a, n_h)), -np.eye(n_a)])
+    minus = np.hstack([-Ac, np.zeros((n_a, n_h)), -np.eye(n_a)])
+    slack_bounds = np.hstack([np.zeros((n_h + n_a, n)), -np.eye(n_h + n_a)])
+    box = np.hstack([np.vstack([np.eye(n), -np.eye(n)]), np.zeros((2 * n, n_h + n_a))])
+    A = np.vstack([np.hstack([E, np.zeros((2, n_h + n_a))]), np.hstack([G, np.zeros((2, n_h + n_a))]),
+                   hinge, plus, minus, slack_bounds, box])
+    b = np.concatenate([np.zeros(2), np.abs(rng.normal(size=2)), bh, -e, e, np.zeros(n_h + n_a), np.full(2 * n, 1.5)])
+    P = np.zeros((N, N))
+    P[:n, :n] = H
+    q = np.concatenate([rng.normal(size=n) * 5, np.full(n_h + n_a, penalty)])
+    return ConicProgram(sp.csc_matrix(np.triu(P)), q, sp.csc_matrix(A), b,
+                        Cones(zero=2, nonneg=A.shape[0] - 2))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_daqp_solves_penalty_slacks_as_pieces_exactly(seed):
+    """DAQP sees the 6 core variables only; its answer, slacks and row multipliers, is Clarabel's."""
+    program = penalized_qp(seed)
+    backend = make_backend("daqp", program, tolerance=1e-9)
+    layout = backend._layout
+    assert (layout.core.size, layout.hinge.size, layout.absolute.size) == (6, 4, 2)
+    res = backend.solve()
+    ref = make_backend("clarabel", program, tolerance=1e-10).solve()
+    assert res.status == ref.status == "optimal"
+    assert res.objective == pytest.approx(ref.objective, rel=1e-8, abs=1e-8)
+    np.testing.assert_allclose(res.x, ref.x, atol=1e-6)
+    assert res.primal_residual <= 1e-9 and res.dual_residual <= 1e-8
+    nz = program.cones.zero
+    assert np.all(res.z[nz:] >= 0)
+    # the equality rows' multipliers (the SCP's curvature needs them) and the hinge rows' are unique
+    np.testing.assert_allclose(res.z[:8], ref.z[:8], atol=1e-6)
+    # the opposite rows of an |.| penalty: only their difference is determined
+    np.testing.assert_allclose(res.z[8:10] - res.z[10:12], ref.z[8:10] - ref.z[10:12], atol=1e-6)
+
+
+def test_daqp_warm_start_follows_updates():
+    """One backend, a sequence of programs with the same pattern: every answer is Clarabel's."""
+    backend = make_backend("daqp", penalized_qp(0), tolerance=1e-9)
+    for seed in range(1, 5):
+        program = penalized_qp(seed, penalty=10.0)
+        backend.update(program)
+        res = backend.solve()
+        ref = make_backend("clarabel", program, tolerance=1e-10).solve()
+        assert res.status == "optimal" and res.objective == pytest.approx(ref.objective, rel=1e-8, abs=1e-8)
+
+
+def test_daqp_reports_infeasible_and_refuses_cones():
+    prog = small_qp()
+    prog.A = sp.csc_matrix(np.array([[1.0, 1.0], [-1.0, -1.0]]))
+    prog.b = np.array([1.0, -2.0])
+    assert make_backend("daqp", prog).solve().status == "infeasible"
+    soc = ConicProgram(sp.csc_matrix((3, 3)), np.array([1.0, 0, 0]), sp.csc_matrix(-np.eye(3)), np.zeros(3),
+                       Cones(soc=(3,)))
+    with pytest.raises(BackendError):
+        make_backend("daqp", soc)
+
+
+def test_daqp_solves_a_linear_program_by_proximal_iterations():
+    """No curvature at all: DAQP's proximal iterations still reach the vertex, graded optimal."""
+    prog = ConicProgram(sp.csc_matrix((2, 2)), np.array([-1.0, -2.0]),
+                        sp.csc_matrix(np.array([[1.0, 1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])),
+                        np.array([1.5, 1.0, 1.0, 0.0, 0.0]), Cones(nonneg=5))
+    res = make_backend("daqp", prog, tolerance=1e-9).solve()
+    assert res.status == "optimal"
+    np.testing.assert_allclose(res.x, [0.5, 1.0], atol=1e-7)
+
+
+def test_auto_picks_by_cones_size_and_density():
+    assert auto_backend(small_qp()) == "daqp"  # small and dense
+    soc = ConicProgram(sp.csc_matrix((3, 3)), np.array([1.0, 0, 0]), sp.csc_matrix(-np.eye(3)), np.zeros(3),
+                       Cones(soc=(3,)))
+    assert auto_backend(soc) == "clarabel"
+    res = make_backend("auto", soc).solve()
+    assert res.status == "optimal" and res.x[0] == pytest.approx(0.0, abs=1e-6)
+    n = 400  # large and sparse: a diagonal QP with a box
+    big = ConicProgram(sp.identity(n, format="csc"), np.ones(n), sp.vstack([sp.identity(n), -sp.identity(n)]).tocsc(),
+                       np.ones(2 * n), Cones(nonneg=2 * n))
+    assert auto_backend(big) == "clarabel"
+    backend = make_backend("auto", small_qp())
+    assert isinstance(backend, FallbackBackend) and backend.name.startswith("auto -> daqp")
+
+
+def test_fallback_answers_when_the_primary_is_not_optimal():
+    class Failing(DaqpBackend):
+        def solve(self):
+            return BackendResult("optimal_inaccurate", np.zeros(2), 0.0, 3, 0.0, 1.0, 1.0)
+
+    program = small_qp()
+    backend = FallbackBackend(Failing(program), "clarabel", program, 1e-9)
+    res = backend.solve()
+    assert res.status == "optimal" and backend.fallbacks == 1
+    np.testing.assert_allclose(res.x, [0.2, 0.8], atol=1e-6)
+    backend.update(small_qp(shift=0.5))
+    np.testing.assert_allclose(backend.solve().x, [0.25, 1.25], atol=1e-6)
+    assert backend.fallbacks == 2

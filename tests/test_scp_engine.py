@@ -32,7 +32,7 @@ from convexguid.scp.problem import (
 )
 
 QPSOLVERS_BACKEND = "qpsolvers:highs"
-BACKENDS = ("clarabel", "osqp", QPSOLVERS_BACKEND)
+BACKENDS = ("auto", "clarabel", "osqp", "daqp", QPSOLVERS_BACKEND)
 
 
 def _backends(**xfails: str) -> list:
@@ -387,3 +387,36 @@ def test_inconsistent_hard_constraints_are_reported_not_raised(kind, backend):
     assert "inconsistent" in result.message
     assert not any(r.accepted for r in result.history)
     assert result.x.shape == (2,) and np.all(np.isfinite(result.x))
+
+
+# --- 6. the backend setting resolved: assembly and solver ---------------------------------------
+
+@pytest.mark.parametrize(("program", "backend", "label", "condensed"), [
+    (RosenbrockDisk, "auto", "auto -> daqp (condensed)", True),  # 2 variables, dense residual Jacobian
+    (HS071Epigraph, "auto", "auto -> clarabel (sparse)", False),  # no residuals: nothing to condense
+    (RosenbrockDisk, "clarabel", "clarabel", False),  # explicit names as they always were
+    (RosenbrockDisk, "osqp", "osqp", False),
+    (RosenbrockDisk, "daqp", "daqp", True),  # the dense backend always gets the condensed form
+], ids=["auto-dense", "auto-no-residuals", "clarabel", "osqp", "daqp"])
+def test_the_backend_setting_is_resolved_once_and_reported(program, backend, label, condensed):
+    algorithm = engine.SCPAlgorithm(program(), SCPSettings(backend=backend, **HS071_SETTINGS))
+    result = algorithm.run()
+    assert result.status == "converged", result.message
+    assert algorithm.choice.condensed is condensed
+    assert isinstance(algorithm.assembler, engine.CondensedAssembler if condensed else engine.SubproblemAssembler)
+    assert result.solver == algorithm.solver_label == label
+
+
+def test_auto_goes_sparse_for_a_large_or_sparse_program():
+    import scipy.sparse as sp
+
+    from convexguid.scp.choice import choose_subproblem
+
+    n = 4
+    dense = Evaluation(np.ones(3), np.ones((3, n)))
+    assert choose_subproblem("auto", n, dense, np.ones(3)).condensed
+    assert not choose_subproblem("auto", n, dense, np.zeros(3)).condensed  # phase 1: no weights, an LP
+    assert not choose_subproblem("auto", 301, Evaluation(np.ones(3), np.ones((3, 301))), np.ones(3)).condensed
+    sparse = Evaluation(np.ones(3), sp.coo_matrix(np.eye(3, n)),
+                        equalities=(ConstraintBlock("e", np.zeros(4), sp.coo_matrix(np.eye(4, n))),))
+    assert not choose_subproblem("auto", n, sparse, np.ones(3)).condensed

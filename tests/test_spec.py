@@ -74,7 +74,7 @@ def test_real_problem_in_si_units() -> None:
     disc = spec.discretization
     assert (disc.method, disc.nodes, disc.map_epsilon, disc.check_points_per_interval) == (
         "mapped_chebyshev", 32, 1e-6, 2)
-    assert (spec.solver.backend, spec.solver.max_iterations, spec.solver.tolerance) == ("clarabel", 50, 1e-6)
+    assert (spec.solver.backend, spec.solver.max_iterations, spec.solver.tolerance) == ("auto", 50, 1e-6)
     assert spec.verification.grid_points == 2001
     ref = spec.reference
     assert ref is not None and ref.table == "Table 1" and "10.6052/1672-6553-2018-005" in ref.citation

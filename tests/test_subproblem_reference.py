@@ -10,6 +10,11 @@ sparse conic form (scaled columns, fixed CSC pattern). Here cvxpy states it as t
 
 and both must have the same optimal value and step ``d``: on the flat-attitude program of
 Cai et al. 2018 (8 nodes) and on a tiny hand-written program with every kind of constraint.
+
+The condensed subproblem (:class:`~convexguid.scp.condensed.CondensedAssembler`, the lifted
+residuals substituted) is the same problem in fewer variables: solved by Clarabel and by DAQP
+it must give the lifted one's step, model value and equality multipliers, on the flat-attitude
+program at 8 and 32 nodes and on the tiny program.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import scipy.sparse as sp
 from convexguid.backends import make_backend
 from convexguid.families.flat_attitude.program import FlatAttitudeProgram, build_problem
 from convexguid.scp.assembly import SubproblemAssembler
+from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 from convexguid.spec import load_problem
 
@@ -70,21 +76,37 @@ def cvxpy_subproblem(x, ev: Evaluation, lin: LinearConstraints, out: OutputConst
     return float(problem.value), d.value
 
 
-def assembled_subproblem(x, ev, lin, out, scale, cost, weights, radius, rho):
-    """The same subproblem from :class:`SubproblemAssembler` solved by the clarabel backend."""
-    assembler = SubproblemAssembler(x.size, ev, lin, out, scale, cost, weights)
+def assembled_subproblem(x, ev, lin, out, scale, cost, weights, radius, rho, assembler_type=SubproblemAssembler,
+                         backend="clarabel"):
+    """The same subproblem from ``assembler_type`` solved by ``backend``: model value, step, equality multipliers."""
+    assembler = assembler_type(x.size, ev, lin, out, scale, cost, weights)
     program = assembler.build(x, ev, radius, rho)
-    result = make_backend("clarabel", program, tolerance=1e-10).solve()
+    result = make_backend(backend, program, tolerance=1e-10).solve()
     assert result.status == "optimal", result.status
-    return program.objective(result.x), assembler.step(result.x)
+    return program.objective(result.x), assembler.step(result.x), assembler.equality_multipliers(result.z)
 
 
-def flat_attitude_case():
-    """Cai et al. 2018 with 8 nodes, about the initial guess: residuals = torques, keep-out cone, torque box."""
-    program = FlatAttitudeProgram(build_problem(load_problem(FLAT, ["discretization.nodes=8"])))
+def flat_attitude_case(nodes: int = 8):
+    """Cai et al. 2018 with ``nodes`` nodes, about the initial guess: residuals = torques, keep-out cone, torque box."""
+    program = FlatAttitudeProgram(build_problem(load_problem(FLAT, [f"discretization.nodes={nodes}"])))
     x = program.initial_guess()
     return (x, program.evaluate(x), program.linear_constraints(), program.output_constraints(),
             program.variable_scale(), program.linear_cost(), program.residual_weights(), 0.05, 10.0)
+
+
+def flat_attitude_converging_case():
+    """Cai et al. 2018 with 32 nodes (99 variables) one accepted step later, with the step wide open.
+
+    About the initial guess the 0.05 trust region binds everywhere; here the radius 1 leaves the
+    energy, the torque box and the keep-out cone to decide, as in the last SCP iterations.
+    """
+    program = FlatAttitudeProgram(build_problem(load_problem(FLAT, ["discretization.nodes=32"])))
+    x0 = program.initial_guess()
+    args = (x0, program.evaluate(x0), program.linear_constraints(), program.output_constraints(),
+            program.variable_scale(), program.linear_cost(), program.residual_weights(), 0.5, 1e3)
+    _, d, _ = assembled_subproblem(*args)
+    x = x0 + d
+    return (x, program.evaluate(x), *args[2:7], 1.0, 1e3)
 
 
 def tiny_case():
@@ -107,7 +129,7 @@ def tiny_case():
 def test_assembled_subproblem_is_the_stated_one(case):
     args = case()
     value_ref, d_ref = cvxpy_subproblem(*args)
-    value, d = assembled_subproblem(*args)
+    value, d, _ = assembled_subproblem(*args)
     x, scale, radius = args[0], args[4], args[7]
     print(f"value: assembled {value:.12g}, cvxpy {value_ref:.12g}, difference {abs(value - value_ref):.2e}; "
           f"max |d - d_cvxpy| {np.max(np.abs(d - d_ref)):.2e}")
@@ -117,3 +139,33 @@ def test_assembled_subproblem_is_the_stated_one(case):
     assert np.max(np.abs(d) / scale) > 0.1 * radius
     assert np.isclose(np.max(np.abs(d) / scale), radius, rtol=1e-6)
     assert x.size == d.size
+
+
+CONDENSED_CASES = [pytest.param(flat_attitude_case, id="flat_attitude_8_nodes"),
+                   pytest.param(lambda: flat_attitude_case(32), id="flat_attitude_32_nodes"),
+                   pytest.param(flat_attitude_converging_case, id="flat_attitude_32_nodes_open"),
+                   pytest.param(tiny_case, id="tiny")]
+
+
+@pytest.fixture(scope="module")
+def lifted_answers() -> dict:
+    """The lifted subproblem's answer per case (Clarabel, 1e-10), computed once."""
+    return {}
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "daqp"])
+@pytest.mark.parametrize("case", CONDENSED_CASES)
+def test_condensed_subproblem_has_the_lifted_optimum(case, backend, lifted_answers):
+    args = case()
+    if case not in lifted_answers:
+        lifted_answers[case] = assembled_subproblem(*args)
+    value_ref, d_ref, lam_ref = lifted_answers[case]
+    value, d, lam = assembled_subproblem(*args, assembler_type=CondensedAssembler, backend=backend)
+    scale, radius = args[4], args[7]
+    print(f"{backend}: model value condensed {value:.12g}, lifted {value_ref:.12g}; "
+          f"max |d - d_lifted| / scale {np.max(np.abs(d - d_ref) / scale):.2e}")
+    # the model value the engine compares with the merit: the condensed program carries r'Wr as its constant
+    assert value == pytest.approx(value_ref, rel=TOL, abs=TOL)
+    assert np.allclose(d / scale, d_ref / scale, rtol=0, atol=TOL * max(1.0, np.max(np.abs(d_ref / scale))))
+    np.testing.assert_allclose(lam, lam_ref, rtol=1e-5, atol=1e-6 * max(1.0, np.max(np.abs(lam_ref), initial=0.0)))
+    assert np.max(np.abs(d) / scale) > 0.1 * radius  # not a trivial step

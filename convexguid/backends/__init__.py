@@ -13,22 +13,36 @@ once and then receives new numbers with the same sparsity pattern every SCP
 iteration (:meth:`Backend.update`), so persistent solvers skip their symbolic
 factorisation.
 
-Names: ``clarabel`` (default, QP and SOCP), ``osqp`` (QP only), and
-``qpsolvers:<solver>`` for every QP solver that :mod:`qpsolvers` finds installed
-(re-solved from scratch each time: meant for cross-checks).
+Names: ``auto`` (the default: :func:`~convexguid.backends.registry.auto_backend`; the SCP
+decides by :mod:`convexguid.scp.choice`), ``clarabel`` (QP and SOCP), ``osqp`` (QP only),
+``daqp`` (dense active-set QP, :mod:`convexguid.backends.dense`; the SCP hands it the condensed
+subproblem), and ``qpsolvers:<solver>`` for every QP solver that :mod:`qpsolvers` finds
+installed (re-solved from scratch each time: meant for cross-checks).
 """
 
 from __future__ import annotations
 
 from convexguid.backends.base import Backend, BackendResult, Cones, ConicProgram
-from convexguid.backends.registry import available_backends, check_backend_name, make_backend
+from convexguid.backends.registry import (
+    AUTO,
+    FallbackBackend,
+    auto_backend,
+    available_backends,
+    check_backend_name,
+    is_dense_backend,
+    make_backend,
+)
 
 __all__ = [
+    "AUTO",
     "Backend",
     "BackendResult",
     "ConicProgram",
     "Cones",
+    "FallbackBackend",
+    "auto_backend",
     "available_backends",
     "check_backend_name",
+    "is_dense_backend",
     "make_backend",
 ]

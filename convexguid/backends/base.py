@@ -34,11 +34,14 @@ class Cones:
 
 @dataclass
 class ConicProgram:
-    """``min 1/2 x'Px + q'x  s.t.  A x + s = b, s in cones``.
+    """``min 1/2 x'Px + q'x + constant  s.t.  A x + s = b, s in cones``.
 
     ``P`` holds the upper triangle only (CSC); ``A`` is CSC with one row per cone
     entry. The sparsity patterns of ``P`` and ``A`` are fixed for the life of a
-    backend: :meth:`Backend.update` only replaces their ``data`` arrays.
+    backend: :meth:`Backend.update` only replaces their ``data`` arrays. ``constant``
+    does not change the solution; backends ignore it and :meth:`objective` adds it
+    (a condensed subproblem carries the part of its model value that no longer
+    depends on a variable there).
     """
 
     P: sp.csc_matrix
@@ -46,15 +49,16 @@ class ConicProgram:
     A: sp.csc_matrix
     b: np.ndarray
     cones: Cones
+    constant: float = 0.0
 
     @property
     def num_variables(self) -> int:
         return self.q.size
 
     def objective(self, x: np.ndarray) -> float:
-        """:math:`\\tfrac12 x^T P x + q^T x` with ``P`` stored as its upper triangle."""
+        """:math:`\\tfrac12 x^T P x + q^T x` + ``constant``, with ``P`` stored as its upper triangle."""
         px = self.P @ x + self.P.T @ x - self.P.diagonal() * x
-        return float(0.5 * x @ px + self.q @ x)
+        return float(0.5 * x @ px + self.q @ x + self.constant)
 
 
 @dataclass(frozen=True)

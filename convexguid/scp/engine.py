@@ -5,9 +5,10 @@ start point into an :class:`~convexguid.scp.state.IterationState`, and each
 :meth:`~SCPAlgorithm.step` reads as a recipe:
 
 1. convexify: the nonlinear maps and their Jacobians at the iterate (already in the state);
-2. assemble the trust-region subproblem with penalized slacks (:mod:`convexguid.scp.assembly`)
-   and solve it with the chosen backend (:class:`~convexguid.scp.policies.BackendRetry` on a
-   numerical failure);
+2. assemble the trust-region subproblem with penalized slacks, lifted (:mod:`convexguid.scp.assembly`)
+   or condensed (:mod:`convexguid.scp.condensed`) as decided once per run from the backend setting
+   and the program's first evaluation (:mod:`convexguid.scp.choice`), and solve it with the chosen
+   backend (:class:`~convexguid.scp.policies.BackendRetry` on a numerical failure);
 3. judge the step by the ratio of actual to predicted decrease of the exact-penalty merit
 
    .. math::
@@ -45,6 +46,8 @@ import numpy as np
 from convexguid.backends import make_backend
 from convexguid.backends.base import Backend, BackendResult
 from convexguid.scp.assembly import SubproblemAssembler
+from convexguid.scp.choice import SubproblemChoice, choose_subproblem
+from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
@@ -117,7 +120,8 @@ class SCPAlgorithm:
         self.outputs = program.output_constraints()
         self.scale = program.variable_scale()
         self.curvature = getattr(program, "lagrangian_curvature", None)
-        self.assembler: SubproblemAssembler | None = None
+        self.assembler: SubproblemAssembler | CondensedAssembler | None = None
+        self.choice: SubproblemChoice | None = None
         self.backend: Backend | None = None
         self.objective_at_start = 0.0
 
@@ -158,17 +162,26 @@ class SCPAlgorithm:
         if infeasible:
             state.finish("infeasible", "certificate: " + restored.certificate)
         if self.assembler is None:
-            self.assembler = SubproblemAssembler(self.program.num_variables, raw, self.program.linear_constraints(),
-                                                 self.outputs, self.scale, self.cost, self.weights,
-                                                 curvature=self.curvature is not None)
+            # the assembly and the backend, decided once from the first evaluation (backend: auto)
+            self.choice = choose_subproblem(self.settings.backend, self.program.num_variables, raw, self.weights)
+            assembler = CondensedAssembler if self.choice.condensed else SubproblemAssembler
+            self.assembler = assembler(self.program.num_variables, raw, self.program.linear_constraints(),
+                                       self.outputs, self.scale, self.cost, self.weights,
+                                       curvature=self.curvature is not None)
         return state
+
+    @property
+    def solver_label(self) -> str:
+        """The backend as the summary shows it: the setting, resolved (``auto -> daqp (condensed)``)."""
+        return self.choice.label if self.choice is not None else self.settings.backend
 
     def _solve_subproblem(self, state: IterationState, ev: Evaluation,
                           hessian: np.ndarray | None) -> tuple[BackendResult, float]:
         """The backend's answer, and the subproblem's model of the merit after its step."""
         program_k = self.assembler.build(state.x, ev, state.radius, state.penalty, hessian)
         if self.backend is None:
-            self.backend = make_backend(self.settings.backend, program_k, self.settings.backend_tolerance)
+            self.backend = make_backend(self.choice.backend, program_k, self.settings.backend_tolerance,
+                                        fallback=self.choice.fallback)
         else:
             self.backend.update(program_k)
         result = self.backend.solve()
@@ -201,7 +214,7 @@ class SCPAlgorithm:
             state.radius = self.trust_region.after_failure(state.radius)
             self._record(state, 0.0, float("nan"), False, result)
             if not self.retry.retry(state.failures):
-                state.finish("solver_error", f"backend {s.backend} returned {result.status} "
+                state.finish("solver_error", f"backend {self.solver_label} returned {result.status} "
                                              f"{state.failures} times in a row")
             return self._check_limit(state)
         state.failures = 0
@@ -313,7 +326,7 @@ class SCPAlgorithm:
                          max_violation=max_violation(state.ev), violations=violation_by_block(state.ev),
                          iterations=state.iteration, history=state.history, message=state.message,
                          wall_time_s=time.perf_counter() - state.started, convexify_time_s=state.convexify_time_s,
-                         solver_time_s=state.solver_time_s)
+                         solver_time_s=state.solver_time_s, solver=self.solver_label)
 
     def run(self, x0: np.ndarray | None = None) -> SCPResult:
         state = self.initialize(x0)

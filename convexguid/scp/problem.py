@@ -141,7 +141,7 @@ class SCPSettings:
     numerical failures of the convex solver in a row are retried with a smaller trust region.
     """
 
-    backend: str = "clarabel"
+    backend: str = "auto"
     max_iterations: int = 50
     tolerance: float = 1e-6
     feasibility_tolerance: float = 1e-7

@@ -81,6 +81,8 @@ class SCPResult:
     wall_time_s: float = 0.0
     convexify_time_s: float = 0.0
     solver_time_s: float = 0.0
+    solver: str = ""
+    """The backend that solved the subproblems, resolved (e.g. ``auto -> daqp (condensed)``)."""
 
     @property
     def overhead_time_s(self) -> float:

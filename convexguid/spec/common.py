@@ -311,7 +311,8 @@ class SolverSettings(SpecModel):
     Attributes
     ----------
     backend : str
-        Convex solver name (see :mod:`convexguid.backends`).
+        Convex solver name (see :mod:`convexguid.backends`); ``auto`` (the default) picks the
+        subproblem's form and solver from the program (:mod:`convexguid.scp.choice`).
     max_iterations : int
         Maximum number of SCP iterations.
     tolerance : float
@@ -324,7 +325,7 @@ class SolverSettings(SpecModel):
         Print the iteration table.
     """
 
-    backend: str = "clarabel"
+    backend: str = "auto"
     max_iterations: Annotated[int, Field(ge=1)] = 50
     tolerance: PositiveFloat = 1e-6
     trust_region: PositiveFloat = 0.5

@@ -231,3 +231,5 @@ class RendezvousPlan:
     timing: dict[str, float]
     figures: ArcsPlanFigures | LcvxPlanFigures
     history: list[IterationRecord]
+    solver: str = ""
+    """The convex backend as it ran (e.g. ``auto -> clarabel (sparse)``); empty: the spec's setting."""

@@ -113,7 +113,7 @@ def solve_lcvx(case: Rendezvous, steps: int, backend: str = "clarabel") -> Rende
                    else f"backend {backend} returned {res.status}")
         empty = Trajectory(grid, {})
         return RendezvousPlan(status, message, float("nan"), res.iterations, size, (), ThrustPlan((), nu), empty,
-                              timing, LcvxPlanFigures(solver_iterations=res.iterations), [])
+                              timing, LcvxPlanFigures(solver_iterations=res.iterations), [], solver.name)
     z = res.x.reshape(steps, width)
     u, throttle = z[:, :nu], z[:, nu]
     states = np.empty((steps + 1, case.nx))
@@ -135,4 +135,4 @@ def solve_lcvx(case: Rendezvous, steps: int, backend: str = "clarabel") -> Rende
     return RendezvousPlan("converged", "global optimum of the lossless convexification (one SOCP)",
                           float(throttle.sum() * case.duration / steps), res.iterations, size,
                           burn_structure(grid, throttle), ThrustPlan.from_steps(grid, u, threshold=1e-9), nodes,
-                          timing, figures, [])
+                          timing, figures, [], solver.name)

@@ -59,7 +59,7 @@ def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None)
         spec, status=plan.status, message=plan.message, started=start, objective=plan.objective,
         iterations=plan.iterations, size=plan.size, verification=verification, history=plan.history,
         nodes=plan.nodes, dense=Trajectory(track.t, state_columns(case.dim, track.states, track.u, case.accel)),
-        figures=figures, timing=plan.timing, repair_rounds=rounds)
+        figures=figures, timing=plan.timing, repair_rounds=rounds, solver=plan.solver or None)
 
 
 def _arcs(burns: tuple[BurnArc, ...]) -> tuple[tuple[float, float], ...]:
@@ -127,7 +127,8 @@ def _solve_arcs(case: Rendezvous, spec, log) -> tuple[RendezvousPlan, list]:
                               subintervals_per_burn=program.layout.subintervals,
                               planned_direction_norm_min=_interpolated_norm_min(times, dirs, burns))
     plan = RendezvousPlan(outcome.status, outcome.message, result.objective, result.iterations, program.size(),
-                          burns, program.thrust_plan(result.x), nodes, result.timing(), figures, result.history)
+                          burns, program.thrust_plan(result.x), nodes, result.timing(), figures, result.history,
+                          result.solver)
     return plan, outcome.rounds
 
 

@@ -1,0 +1,65 @@
+"""Which subproblem assembly and which backend an SCP run uses (``backend: auto`` and explicit names).
+
+The lifted subproblem (:mod:`convexguid.scp.assembly`) suits a sparse interior-point solver: the
+Jacobian of the residuals appears once in a large sparse KKT system. The condensed one
+(:mod:`convexguid.scp.condensed`) suits a dense active-set solver: the residuals are substituted
+and the QP has the step's size. ``auto`` decides once per run, from the program's first
+evaluation:
+
+* the condensed subproblem with DAQP when the program is small (at most
+  :data:`~convexguid.backends.registry.DENSE_MAX_VARIABLES` variables), has residuals with weight
+  (something to condense: a Hessian for the active-set solver), and its Jacobians (residuals and
+  nonlinear constraints) hold at least
+  :data:`~convexguid.backends.registry.DENSE_MIN_DENSITY` nonzeros; a DAQP answer that is not
+  ``optimal`` is solved again by Clarabel;
+* otherwise the lifted subproblem with Clarabel.
+
+(SCP subproblems have no second-order cones; a conic program that has them goes to Clarabel,
+:func:`~convexguid.backends.registry.auto_backend`.) An explicit name keeps today's behaviour:
+the lifted subproblem for ``clarabel``, ``osqp`` and ``qpsolvers:*``, the condensed one for the
+dense backend ``daqp``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from convexguid.backends.registry import AUTO, DENSE_MAX_VARIABLES, DENSE_MIN_DENSITY, is_dense_backend, native_backends
+from convexguid.scp.problem import Evaluation
+
+
+@dataclass(frozen=True)
+class SubproblemChoice:
+    """The backend name handed to :func:`~convexguid.backends.make_backend`, the assembly, and the label shown."""
+
+    backend: str
+    condensed: bool
+    label: str
+    fallback: str | None = None
+
+
+def jacobian_density(first: Evaluation) -> float:
+    """Share of nonzeros in the Jacobians of the residuals and of the nonlinear constraints."""
+    blocks = [first.residual_jacobian, *(b.jacobian for b in (*first.inequalities, *first.equalities))]
+    nnz = size = 0
+    for block in blocks:
+        if block is None:
+            continue
+        rows, cols = block.shape
+        size += rows * cols
+        nnz += block.nnz if sp.issparse(block) else int(np.count_nonzero(block))
+    return nnz / size if size else 0.0
+
+
+def choose_subproblem(name: str, n: int, first: Evaluation, weights: np.ndarray) -> SubproblemChoice:
+    """The assembly and backend for backend setting ``name`` on a program with ``n`` variables."""
+    if name != AUTO:
+        return SubproblemChoice(name, is_dense_backend(name), name)
+    dense = ("daqp" in native_backends() and n <= DENSE_MAX_VARIABLES and bool(np.any(np.asarray(weights) > 0))
+             and first.residuals.size > 0 and jacobian_density(first) >= DENSE_MIN_DENSITY)
+    if dense:
+        return SubproblemChoice("daqp", True, f"{AUTO} -> daqp (condensed)", fallback="clarabel")
+    return SubproblemChoice("clarabel", False, f"{AUTO} -> clarabel (sparse)")
