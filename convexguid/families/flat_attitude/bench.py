@@ -17,9 +17,6 @@ Every case runs ``repeat`` times and the fastest run is reported.
 from __future__ import annotations
 
 import argparse
-import datetime
-import os
-import platform
 import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -28,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench_common import FLAT_DEFAULT_NODES, cell, markdown_grid, one_line, package_version
+from convexguid.bench_common import FLAT_DEFAULT_NODES, cell, environment_lines, markdown_grid, one_line
 from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
 from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt
 from convexguid.reference import casadi_available
@@ -203,16 +200,10 @@ def _notes(rows: Sequence[BenchRow]) -> list[str]:
 
 def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLike[str],
               ipopt_note: str | None) -> str:
-    machine = platform.processor() or platform.machine()
-    versions = ", ".join(f"{p} {package_version(p)}" for p in ("numpy", "clarabel", "osqp", "casadi"))
-    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     header = [
         f"# convexguid benchmark: SCP vs IPOPT on `{Path(problem_path).name}`",
         "",
-        f"- Machine: {machine}, {os.cpu_count()} logical CPUs ({platform.platform()}, "
-        f"Python {platform.python_version()})",
-        f"- Versions: {versions}",
-        f"- Date: {when}",
+        *environment_lines(("numpy", "clarabel", "daqp", "osqp", "casadi")),
         f"- Command: `{command}`",
         "",
         "Both methods solve the identical transcription (mapped Chebyshev) from the same initial guess, in two "
