@@ -104,19 +104,7 @@ class SubproblemAssembler:
         pat.add_sparse(row, y0, outputs.M)
         pat.add_diagonal(row, so0, n_o)
         row += n_o
-        for block in first.inequalities:
-            _add_jacobian(pat, row, block.jacobian, block.values.size, n)
-            row += block.values.size
-        pat.add_diagonal(row - self.n_ineq, sg0, self.n_ineq)
-        for _ in range(2):
-            for block in first.equalities:
-                _add_jacobian(pat, row, block.jacobian, block.values.size, n)
-                row += block.values.size
-            pat.add_diagonal(row - self.n_eq, t0, self.n_eq)
-        pat.add_diagonal(row, so0, self.n_slack)
-        row += self.n_slack
-        pat.add_diagonal(row, 0, n)
-        pat.add_diagonal(row + n, 0, n)
+        add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
         pat.finish()
         self._a_pattern = pat
         self._m_data = sp.coo_matrix(outputs.M).data
@@ -173,6 +161,32 @@ class SubproblemAssembler:
         """The step ``d`` from a subproblem solution (whose first block is ``d`` in scaled units)."""
         return z[: self.n] * self.scale
 
+
+
+def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
+                      counts: tuple[int, int, int]) -> None:
+    """The rows after the output constraints, shared by the lifted and the condensed subproblem.
+
+    In order: the linearized inequalities with their slacks, the linearized equalities twice (``+`` and ``-``)
+    with theirs, the nonnegativity of every slack, and the trust region on the step's ``n`` columns.
+    ``starts`` are the first columns of the output, inequality and equality slacks; ``counts`` the numbers
+    of inequality rows, equality rows and slacks.
+    """
+    so0, sg0, t0 = starts
+    n_ineq, n_eq, n_slack = counts
+    for block in first.inequalities:
+        _add_jacobian(pat, row, block.jacobian, block.values.size, n)
+        row += block.values.size
+    pat.add_diagonal(row - n_ineq, sg0, n_ineq)
+    for _ in range(2):
+        for block in first.equalities:
+            _add_jacobian(pat, row, block.jacobian, block.values.size, n)
+            row += block.values.size
+        pat.add_diagonal(row - n_eq, t0, n_eq)
+    pat.add_diagonal(row, so0, n_slack)
+    row += n_slack
+    pat.add_diagonal(row, 0, n)
+    pat.add_diagonal(row + n, 0, n)
 
 def _add_jacobian(pat: _Pattern, row0: int, jacobian: np.ndarray | sp.spmatrix | None, rows: int, n: int) -> None:
     if sp.issparse(jacobian):

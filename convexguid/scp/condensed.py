@@ -37,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram
-from convexguid.scp.assembly import _add_jacobian, _jacobian_data, _Pattern, _values
+from convexguid.scp.assembly import _add_jacobian, _jacobian_data, _Pattern, _values, add_softened_rows
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
 
 
@@ -73,19 +73,7 @@ class CondensedAssembler:
         pat.add_dense(row, 0, n_o, n)
         pat.add_diagonal(row, so0, n_o)
         row += n_o
-        for block in first.inequalities:
-            _add_jacobian(pat, row, block.jacobian, block.values.size, n)
-            row += block.values.size
-        pat.add_diagonal(row - self.n_ineq, sg0, self.n_ineq)
-        for _ in range(2):
-            for block in first.equalities:
-                _add_jacobian(pat, row, block.jacobian, block.values.size, n)
-                row += block.values.size
-            pat.add_diagonal(row - self.n_eq, t0, self.n_eq)
-        pat.add_diagonal(row, so0, self.n_slack)
-        row += self.n_slack
-        pat.add_diagonal(row, 0, n)
-        pat.add_diagonal(row + n, 0, n)
+        add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
         pat.finish()
         self._a_pattern = pat
         self._M = sp.csr_matrix(outputs.M)
