@@ -26,7 +26,7 @@ from convexguid.control.lpmpc import (
     terminal_map,
 )
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices
-from convexguid.sim.tracking import Nominal, integrate
+from convexguid.sim.tracking import Nominal, integrate, interp_rows
 from convexguid.transcription.lgr import RadauGrid
 
 
@@ -116,7 +116,7 @@ class LpmpcTracker:
             self.checks.append(Check(t, predicted, False, miss, prediction_time_s=c1 - c0,
                                      integration_time_s=c2 - c1))
             return
-        grid, tmap = self._map(t, lambda times: _interp(grid_t, flown, times))
+        grid, tmap = self._map(t, lambda times: interp_rows(grid_t, flown, times))
         u_nodes = nominal.control(grid.times[1:])
         du = (least_change_correction(tmap, miss, u_nodes.shape[1]) if s.least_change
               else energy_optimal_correction(tmap, u_nodes, miss))
@@ -131,6 +131,3 @@ class LpmpcTracker:
         self.checks.append(Check(t, predicted, True, miss, leaves, c1 - c0, c3 - c2,
                                  c2 - c1 + time.perf_counter() - c3))
 
-
-def _interp(grid: np.ndarray, values: np.ndarray, times: np.ndarray) -> np.ndarray:
-    return np.stack([np.interp(times, grid, values[:, j]) for j in range(values.shape[1])], -1)

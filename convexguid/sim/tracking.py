@@ -35,16 +35,16 @@ class Nominal:
         return int(np.clip(np.searchsorted(self.t, t - 1e-12), 0, self.t.size - 1))
 
     def state(self, t: float | np.ndarray) -> np.ndarray:
-        return _interp_rows(self.t, self.x, t)
+        return interp_rows(self.t, self.x, t)
 
     def control(self, t: float | np.ndarray) -> np.ndarray:
-        return _interp_rows(self.t, self.u, t)
+        return interp_rows(self.t, self.u, t)
 
 
-def _interp_rows(grid: np.ndarray, values: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+def interp_rows(grid: np.ndarray, values: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    """Every column of ``values`` (sampled on ``grid``) interpolated linearly at ``t``."""
     t = np.asarray(t, dtype=float)
-    out = np.stack([np.interp(t, grid, values[:, k]) for k in range(values.shape[1])], -1)
-    return out
+    return np.stack([np.interp(t, grid, values[:, k]) for k in range(values.shape[1])], -1)
 
 
 def integrate(x0: np.ndarray, t: np.ndarray, u: np.ndarray, inertia: np.ndarray, inertia_inv: np.ndarray

@@ -14,7 +14,6 @@ Two tables, measured in the same run on this machine:
 from __future__ import annotations
 
 import argparse
-import time
 from dataclasses import replace
 from os import PathLike
 from pathlib import Path
@@ -27,7 +26,7 @@ from convexguid.dynamics.mrp_attitude import mrp_error_matrices
 from convexguid.errors import SpecError
 from convexguid.families.lpmpc.scenario import fly_monte_carlo_run
 from convexguid.families.lpmpc.solve import build_scenario
-from convexguid.families.lpmpc.timing import update_times_ms
+from convexguid.families.lpmpc.timing import median_ms, update_times_ms
 from convexguid.solution import write_text_atomic
 from convexguid.spec import load_problem
 from convexguid.transcription.lgr import RadauGrid
@@ -36,16 +35,16 @@ BENCH_NODES = (8, 10, 12)
 
 
 def _box_update_ms(scenario, repeat: int) -> float:
+    """Median ms of one LPMPC update (N = 8) with the box-constrained QP as the correction."""
     nominal, inertia_inv = scenario.nominal, np.linalg.inv(scenario.inertia)
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
+
+    def update():
         grid = RadauGrid(8, float(nominal.t[0]), float(nominal.t[-1]))
         A, B = mrp_error_matrices(nominal.state(grid.times), scenario.inertia, inertia_inv)
         box_constrained_correction(terminal_map(grid, A, B), nominal.control(grid.times[1:]), 1e-3 * np.ones(6),
                                    scenario.u_max)
-        times.append(time.perf_counter() - start)
-    return float(1e3 * np.median(times))
+
+    return median_ms(update, repeat)
 
 
 TIGHT_BOX = 0.75

@@ -41,6 +41,8 @@ class Scenario:
     lpmpc: LpmpcSettings
     lqr_q: float
     lqr_r: tuple[float, ...]
+    forbidden: tuple[tuple[str, np.ndarray, float], ...] = ()
+    """The nominal problem's forbidden attitudes: (name, scalar-last quaternion, least angle in deg)."""
 
     def initial_state(self, euler_error_deg: np.ndarray, rate_error_degps: np.ndarray) -> np.ndarray:
         """The nominal's initial state with an error in its 3-2-1 Euler angles and body rates."""

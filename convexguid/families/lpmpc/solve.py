@@ -53,14 +53,11 @@ def load_nominal_spec(spec):
     return load_problem(path, [*spec.nominal.set, *timed])
 
 
-def forbidden_angles_deg(nominal_spec, x: np.ndarray) -> dict[str, tuple[float, float]]:
+def forbidden_angles_deg(scenario: Scenario, x: np.ndarray) -> dict[str, tuple[float, float]]:
     """Smallest Euler-axis angle (deg) of the MRP history ``x`` to each forbidden attitude of the nominal's
     problem, with its bound: ``{name: (smallest, min_angle_deg)}`` (empty if the problem has none)."""
-    out = {}
-    for f in getattr(nominal_spec, "forbidden", ()):
-        angles = np.degrees(quat_angle_between(mrp_to_quat(x[:, :3]), np.asarray(f.quaternion, dtype=float)))
-        out[f.name] = (float(angles.min()), float(f.min_angle_deg))
-    return out
+    return {name: (float(np.degrees(quat_angle_between(mrp_to_quat(x[:, :3]), q)).min()), bound)
+            for name, q, bound in scenario.forbidden}
 
 
 def build_scenario(spec) -> tuple[Scenario | None, Solution]:
@@ -85,7 +82,9 @@ def build_scenario(spec) -> tuple[Scenario | None, Solution]:
         lpmpc=LpmpcSettings(s.nodes, s.check_interval_s, s.threshold_mrp, np.radians(s.threshold_rate_degps),
                             box_constrained=s.correction == "box_qp", backend=s.backend,
                             least_change=s.correction == "least_change"),
-        lqr_q=spec.lqr.q, lqr_r=tuple(spec.lqr.r))
+        lqr_q=spec.lqr.q, lqr_r=tuple(spec.lqr.r),
+        forbidden=tuple((f.name, np.asarray(f.quaternion, dtype=float), float(f.min_angle_deg))
+                        for f in getattr(nominal_spec, "forbidden", ())))
     return scenario, nominal_solution
 
 
@@ -110,7 +109,7 @@ def simulate_lpmpc(spec) -> Solution:
     flights = fly_all(scenario, x0, spec.simulation.seed)
     runs = tuple(_controller_run(f, law, scenario.target) for f, law in flights)
     lpmpc_flight, tracker = flights[0]
-    forbidden = forbidden_angles_deg(load_nominal_spec(spec), lpmpc_flight.x)
+    forbidden = forbidden_angles_deg(scenario, lpmpc_flight.x)
     checks = tracker.checks
     monte_carlo, envelopes = _monte_carlo(spec, scenario) if spec.monte_carlo is not None else (None, {})
     update_times = update_times_ms(scenario, spec.timing_nodes) if spec.timing_nodes else None

@@ -20,7 +20,8 @@ from convexguid.sim.tracking import integrate
 from convexguid.transcription.lgr import RadauGrid
 
 
-def _median_ms(call, repeat: int) -> float:
+def median_ms(call, repeat: int) -> float:
+    """Median wall time of ``repeat`` calls of ``call``, ms."""
     times = []
     for _ in range(repeat):
         start = time.perf_counter()
@@ -41,7 +42,7 @@ def update_times_ms(scenario: Scenario, nodes: list[int], repeat: int = 50) -> d
         A, B = mrp_error_matrices(x0, inertia, inertia_inv)
         return nominal.u[0] - lqr_gain(A, B, Q, R) @ (x0 - nominal.x[0])
 
-    out = {"lqr": _median_ms(lqr_update, repeat)}
+    out = {"lqr": median_ms(lqr_update, repeat)}
     for n in nodes:
         def lpmpc_update(n=n):
             grid = RadauGrid(n, float(nominal.t[0]), tf)
@@ -50,7 +51,7 @@ def update_times_ms(scenario: Scenario, nodes: list[int], repeat: int = 50) -> d
             tmap.predict(np.zeros(6))
             return energy_optimal_correction(tmap, nominal.control(grid.times[1:]), miss)
 
-        out[f"lpmpc_n{n}"] = _median_ms(lpmpc_update, repeat)
-    out["integration"] = _median_ms(lambda: integrate(x0, nominal.t, nominal.u, inertia, inertia_inv),
+        out[f"lpmpc_n{n}"] = median_ms(lpmpc_update, repeat)
+    out["integration"] = median_ms(lambda: integrate(x0, nominal.t, nominal.u, inertia, inertia_inv),
                                     max(3, repeat // 10))
     return out
