@@ -410,13 +410,16 @@ def test_the_backend_setting_is_resolved_once_and_reported(program, backend, lab
 def test_auto_goes_sparse_for_a_large_or_sparse_program():
     import scipy.sparse as sp
 
+    from convexguid.backends.registry import DENSE_MAX_VARIABLES
     from convexguid.scp.choice import choose_subproblem
 
     n = 4
     dense = Evaluation(np.ones(3), np.ones((3, n)))
     assert choose_subproblem("auto", n, dense, np.ones(3)).condensed
     assert not choose_subproblem("auto", n, dense, np.zeros(3)).condensed  # phase 1: no weights, an LP
-    assert not choose_subproblem("auto", 301, Evaluation(np.ones(3), np.ones((3, 301))), np.ones(3)).condensed
+    too_many = DENSE_MAX_VARIABLES + 1
+    assert not choose_subproblem("auto", too_many, Evaluation(np.ones(3), np.ones((3, too_many))),
+                                 np.ones(3)).condensed
     sparse = Evaluation(np.ones(3), sp.coo_matrix(np.eye(3, n)),
                         equalities=(ConstraintBlock("e", np.zeros(4), sp.coo_matrix(np.eye(4, n))),))
     assert not choose_subproblem("auto", n, sparse, np.ones(3)).condensed
