@@ -1,7 +1,7 @@
 """convexguid: spacecraft guidance problems solved as sequences of convex programs.
 
-Public API: :func:`load_problem`, :func:`solve`, :func:`simulate`, :func:`validate`.
-They are imported on first use, so ``import convexguid`` stays light (no SCP engine, no matplotlib).
+Public API: :func:`load_problem`, :func:`solve`, :func:`simulate`, :func:`validate`, :func:`run_campaign`.
+They are imported on first use, so ``import convexguid`` stays light (no SCP engine, no matplotlib, no Dask).
 """
 
 from __future__ import annotations
@@ -11,14 +11,15 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from convexguid.api import simulate, solve
+    from convexguid.campaign import run_campaign
     from convexguid.report.validation import validate
     from convexguid.spec import load_problem
 
-__all__ = ["load_problem", "simulate", "solve", "validate"]
+__all__ = ["load_problem", "run_campaign", "simulate", "solve", "validate"]
 __version__ = "0.1.0"
 
 _PUBLIC = {"load_problem": "convexguid.spec", "simulate": "convexguid.api", "solve": "convexguid.api",
-           "validate": "convexguid.report.validation"}
+           "validate": "convexguid.report.validation", "run_campaign": "convexguid.campaign"}
 """Module of each public name."""
 
 

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from convexguid.errors import SpecError
-from convexguid.families import FAMILIES, get_family
+from convexguid.checks import optional_callable, override_list
+from convexguid.errors import SpecError, value_text
+from convexguid.families import FAMILIES, Family, get_family
 from convexguid.spec import ProblemSpec, load_problem
 
 if TYPE_CHECKING:
@@ -15,55 +17,81 @@ if TYPE_CHECKING:
     from convexguid.solution import Solution
 
 
-def _spec(problem: str | Path | ProblemSpec, overrides: Sequence[str]) -> ProblemSpec:
-    """``problem`` loaded (a YAML path) or reloaded with ``overrides`` (a spec)."""
+def _spec(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | None) -> ProblemSpec:
+    """``problem`` loaded (a YAML path) or reloaded with ``overrides`` (a spec), the arguments checked first."""
+    overrides = override_list(overrides)
     if isinstance(problem, ProblemSpec):
         return load_problem(problem.source, overrides) if overrides else problem
+    if not isinstance(problem, (str, PathLike)):
+        raise SpecError(f"problem: expected the path of a problem YAML file or a loaded spec (got "
+                        f"{value_text(problem)}); e.g. convexguid.solve('problems/cai2018_flat_attitude.yaml')")
     return load_problem(problem, overrides)
 
 
-def _check_resolved(spec: ProblemSpec) -> None:
-    """Refuse a problem that still takes an input from another case's result (only validate resolves it)."""
+def check_resolved(spec: ProblemSpec, overridable: bool = True) -> None:
+    """Refuse a problem that still takes an input from another case's result (only validate resolves it).
+
+    ``overridable``: the command takes ``--set`` (the message shows the overrides that would do instead).
+    """
     for key, link_key, link in spec.input_links():
+        instead = (f"set {key} instead (e.g. --set {link_key}=null --set {key}=<value>)" if overridable
+                   else f"give {key} in the file instead (with {link_key}: null)")
         raise SpecError(f"{spec.source}: {link_key}: takes {link.figure} from the result of problem {link.problem!r}, "
                         f"which only `convexguid validate` resolves; run this file through convexguid validate "
-                        f"together with that problem's file, or set {key} instead (e.g. --set {link_key}=null "
-                        f"--set {key}=<value>)")
+                        f"together with that problem's file, or {instead}")
 
 
-def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] = (),
+def check_runnable(spec: ProblemSpec) -> Family:
+    """The family of ``spec`` once the spec can run: no input waits for another case's result
+    (:func:`check_resolved`) and the estimated memory is within the family's limit (:meth:`Family.check_size`).
+
+    Raises
+    ------
+    SpecError
+        One line naming the key (and for a size, the estimate and the limit).
+    """
+    check_resolved(spec)
+    family = get_family(spec.family)
+    family.check_size(spec)
+    return family
+
+
+def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | None = (),
           log: Callable[[IterationRecord], None] | None = None) -> Solution:
     """Plan and verify ``problem`` (a YAML path or a loaded spec).
 
-    ``overrides`` are ``dotted.key=value`` strings as for ``convexguid solve --set``;
-    ``log`` receives one :class:`~convexguid.scp.engine.IterationRecord` per SCP iteration.
+    ``overrides`` are ``dotted.key=value`` strings as for ``convexguid solve --set`` (None: none; a single string:
+    one override); ``log`` (a function or None) receives one :class:`~convexguid.scp.engine.IterationRecord` per
+    SCP iteration.
     A simulated family (``potential_function``) is simulated as by :func:`simulate` (``log`` is unused).
 
     Raises
     ------
     SpecError
-        For invalid input, or an input taken from another case's result (e.g. ``boundary.tf_from``),
-        which only :func:`convexguid.report.validation.validate` resolves.
+        For invalid input (arguments of the wrong type included), a problem above its family's size limit, or an
+        input taken from another case's result (e.g. ``boundary.tf_from``), which only
+        :func:`convexguid.report.validation.validate` resolves.
     """
+    optional_callable("log", log)
     spec = _spec(problem, overrides)
-    _check_resolved(spec)
-    return get_family(spec.family).solve(spec, log)
+    return check_runnable(spec).solve(spec, log)
 
 
-def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] = ()) -> Solution:
+def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | None = ()) -> Solution:
     """Simulate ``problem`` (a YAML path or a loaded spec of a simulated family, e.g. ``potential_function``).
 
-    ``overrides`` are ``dotted.key=value`` strings as for ``convexguid simulate --set``. See
+    ``overrides`` are ``dotted.key=value`` strings as for ``convexguid simulate --set`` (None: none; a single
+    string: one override). See
     :func:`convexguid.sim.runner.simulate_problem` for the status, checks and summary figures.
 
     Raises
     ------
     SpecError
-        For invalid input or a family that is planned, not simulated (use :func:`solve`).
+        For invalid input, a problem above its family's size limit, or a family that is planned, not simulated
+        (use :func:`solve`).
     """
     spec = _spec(problem, overrides)
-    _check_resolved(spec)
-    family = get_family(spec.family)
+    family = check_runnable(spec)
     if not family.simulated:
         simulated = ", ".join(name for name, f in FAMILIES.items() if f.simulated)
         raise SpecError(f"{spec.source}: family: {spec.family!r} is planned, not simulated; use convexguid solve "

@@ -1,4 +1,4 @@
-"""Command line: ``convexguid solve|simulate|validate|bench`` (the contract of design.md).
+"""Command line: ``convexguid solve|simulate|validate|bench|campaign`` (arguments, outputs, exit codes: docs/cli.md).
 
 Exit codes: 0 success; 1 the solve (simulation) did not converge (reach the command) or its
 verification failed (the summary is still written); 2 bad input (one line, no traceback).
@@ -41,6 +41,17 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--runs", type=int, default=20,
                        help="lpmpc files: Monte Carlo runs of the correction comparison")
     bench.add_argument("--output", type=Path, help="also write the table (markdown) here")
+    campaign = sub.add_parser("campaign", help="run a sweep or Monte Carlo over a problem file on Dask (a local "
+                              "cluster by default), tabulate and report it; resumes an interrupted one")
+    campaign.add_argument("campaign", type=Path)
+    campaign.add_argument("--out", type=Path, help="results folder (default campaigns/<file stem>); one holding "
+                          "this campaign's results is resumed")
+    where = campaign.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler "
+                       "(e.g. tcp://host:8786) instead of a local cluster")
+    where.add_argument("--serial", action="store_true", help="run in this process, one run after another (no Dask)")
+    campaign.add_argument("--workers", type=int, help="worker processes of the local cluster (default: every core)")
+    campaign.add_argument("--quiet", action="store_true", help="no progress line")
     return parser
 
 
@@ -49,8 +60,11 @@ def _add_run_arguments(parser: argparse.ArgumentParser, quiet_help: str) -> None
     parser.add_argument("problem", type=Path)
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
                         help="override one YAML value (value parsed as YAML); repeatable")
-    parser.add_argument("--out", type=Path, help="directory for CSV trajectories, summary JSON and plots")
-    parser.add_argument("--summary-json", type=Path, help="write the summary JSON here")
+    parser.add_argument("--out", type=Path, help="folder for CSV trajectories, summary JSON and plots (replaced as "
+                        "a whole when the run completes; a non-empty folder needs --overwrite)")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace a non-empty --out folder (everything in it is removed)")
+    parser.add_argument("--summary-json", type=Path, help="write the summary JSON here (the folder must exist)")
     parser.add_argument("--quiet", action="store_true", help=quiet_help)
 
 
@@ -77,53 +91,99 @@ def _print_result(sol: Solution) -> None:
         print(f"  {finals}\n  verification ({v.grid_points} points): {'passed' if v.passed else 'FAILED'}")
 
 
-def _write_outputs(sol: Solution, out: Path | None, summary_json: Path | None) -> None:
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse unusable ``--out`` / ``--summary-json`` paths before the work starts (OutputError: exit 2)."""
+    from convexguid.outputs import check_output_file, check_output_folder
+
+    if args.out is not None:
+        check_output_folder(args.out, overwrite=args.overwrite, keep=[args.problem])
+    if args.summary_json is not None:
+        check_output_file(args.summary_json, "summary JSON")
+
+
+def _write_outputs(sol: Solution, args: argparse.Namespace) -> list[str]:
+    """Write ``--out`` (a staged folder swapped in whole) and ``--summary-json``; one reason per failed output."""
+    from convexguid.errors import OutputError
+    from convexguid.outputs import describe, staged_folder
     from convexguid.report.plots import plot_solution
 
-    if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        if sol.dense is not None:
-            sol.dense.write_csv(out / "trajectory.csv")
-        if sol.nodes is not None:
-            sol.nodes.write_csv(out / "nodes.csv")
-        sol.write_summary(out / "summary.json")
-        plot_solution(sol, out)
-    if summary_json is not None:
-        sol.write_summary(summary_json)
+    failed = []
+    if args.out is not None:
+        try:
+            with staged_folder(args.out, replace=args.overwrite) as folder:
+                if sol.dense is not None:
+                    sol.dense.write_csv(folder / "trajectory.csv")
+                if sol.nodes is not None:
+                    sol.nodes.write_csv(folder / "nodes.csv")
+                sol.write_summary(folder / "summary.json")
+                plot_solution(sol, folder)
+        except OSError as exc:
+            failed.append(str(exc) if isinstance(exc, OutputError) else f"--out {args.out}: {describe(exc)}")
+    if args.summary_json is not None:
+        try:
+            sol.write_summary(args.summary_json)
+        except OSError as exc:
+            failed.append(f"--summary-json {args.summary_json}: {describe(exc)}")
+    return failed
+
+
+def _report_lost_outputs(sol: Solution, args: argparse.Namespace, failed: list[str]) -> None:
+    """One line on stderr: what could not be written and where the summary is (rescued if need be)."""
+    import json
+
+    from convexguid.outputs import rescue_copy
+
+    if args.summary_json is not None and not any(f.startswith("--summary-json") for f in failed):
+        where = f"the summary is in {args.summary_json}"
+    else:
+        text = json.dumps(sol.summary(), indent=2) + "\n"
+        rescued = rescue_copy(text, "summary.json")
+        where = f"the summary was written to {rescued}" if rescued else "the summary follows on stdout"
+        if rescued is None:
+            print(text, end="")
+    print(f"convexguid: could not write {'; '.join(failed)}; {where}", file=sys.stderr)
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from convexguid.api import solve
+    from convexguid.api import check_runnable, solve
+    from convexguid.progress import run
     from convexguid.spec import load_problem
 
     spec = load_problem(args.problem, args.overrides)
+    check_runnable(spec)
+    _check_outputs(args)
     if not args.quiet:
         _print_header()
-    sol = solve(spec, log=None if args.quiet else _print_row)
+    sol = run(lambda: solve(spec, log=None if args.quiet else _print_row), f"solve {spec.name}")
     return _finish(sol, args)
 
 
 def _finish(sol: Solution, args: argparse.Namespace) -> int:
     """Print the result block, write the outputs and return the exit code (shared by solve and simulate)."""
     _print_result(sol)
-    _write_outputs(sol, args.out, args.summary_json)
+    failed = _write_outputs(sol, args)
+    if failed:
+        _report_lost_outputs(sol, args, failed)
     if not sol.ok:
         reason = sol.message if sol.status != "converged" else "dense verification failed"
         print(f"convexguid: {args.problem}: {sol.status}: {reason}", file=sys.stderr)
         return EXIT_FAILED
-    return EXIT_OK
+    return EXIT_FAILED if failed else EXIT_OK
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from convexguid.api import simulate
+    from convexguid.api import check_runnable, simulate
     from convexguid.families.potential_function.spec import PotentialFunctionProblem
+    from convexguid.progress import run
     from convexguid.spec import load_problem
 
     spec = load_problem(args.problem, args.overrides)
+    check_runnable(spec)
+    _check_outputs(args)
     if not args.quiet and isinstance(spec, PotentialFunctionProblem):
         sweep = f"; sweep theta_m = {', '.join(map(str, spec.sweep.theta_m_deg))} deg" if spec.sweep else ""
         print(f"simulating {spec.name}: {spec.simulation.t_final_s:g} s in steps of {spec.simulation.dt_s:g} s{sweep}")
-    sol = simulate(spec)
+    sol = run(lambda: simulate(spec), f"simulate {spec.name}")
     if not args.quiet:
         _print_sweep(sol)
     return _finish(sol, args)
@@ -145,30 +205,72 @@ def _print_sweep(sol: Solution) -> None:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from convexguid.report.validation import validate
+    from convexguid.outputs import describe
+    from convexguid.progress import run
+    from convexguid.report.timings import timings_path
+    from convexguid.report.validation import check_report_outputs, validate
 
-    results = validate(args.problems, args.report)
+    check_report_outputs(args.report)  # before anything is solved: OutputError, exit 2
+    try:
+        results = run(lambda: validate(args.problems, args.report), "validate")
+    except OSError as exc:  # after the solves: the report or a figure could not be written
+        reason = exc if isinstance(exc, ConvexGuidError) else f"{exc.filename or args.report}: {describe(exc)}"
+        print(f"convexguid: could not write the validation outputs: {reason}", file=sys.stderr)
+        return EXIT_FAILED
     for r in results:
-        print(f"{r.spec.name:<32} {r.solution.status:<12} {'matches paper' if r.ok else 'MISMATCH'}")
-    print(f"report written to {args.report}")
+        verdict = ("matches paper" if r.ok else "MISMATCH") if r.compared else \
+            ("verified, nothing to compare (no reference)" if r.ok else "NOT verified (no reference)")
+        print(f"{r.spec.name:<32} {r.solution.status:<12} {verdict}")
+    print(f"report written to {args.report}; compute times in {timings_path(args.report)}")
     return EXIT_OK if all(r.ok for r in results) else EXIT_FAILED
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
+    from convexguid.backends import check_backend_name
     from convexguid.families import FAMILIES, get_family
+    from convexguid.progress import run
     from convexguid.spec import load_problem
 
-    family = get_family(load_problem(args.problem).family)
+    for option, value in (("--repeat", args.repeat), ("--runs", args.runs), *(("--nodes", n) for n in args.nodes)):
+        if value < 1:
+            raise SpecError(f"{option}: must be at least 1 (got {value})")
+    for name in args.backends:
+        try:
+            check_backend_name(name)
+        except ConvexGuidError as exc:
+            raise SpecError(f"--backends: {exc}") from None
+    spec = load_problem(args.problem)
+    family = get_family(spec.family)
     if family.bench is None:
         benched = ", ".join(name for name, f in FAMILIES.items() if f.bench is not None)
         raise SpecError(f"{args.problem}: family {family.name!r} has no benchmark; "
                         f"convexguid bench handles: {benched}")
-    return family.bench(args.problem, args)
+    return run(lambda: family.bench(args.problem, args), f"bench {args.problem}")
+
+
+def _cmd_campaign(args: argparse.Namespace) -> int:
+    from convexguid.campaign import run_campaign
+    from convexguid.campaign.progress import ProgressLine
+
+    progress = None if args.quiet else ProgressLine(args.campaign.stem)
+    try:
+        result = run_campaign(args.campaign, args.out, scheduler=args.scheduler, workers=args.workers,
+                              serial=args.serial, progress=progress)
+    except KeyboardInterrupt:
+        print(f"convexguid: {args.campaign}: the runs that finished are in the results table; the same command "
+              "resumes the campaign", file=sys.stderr)
+        raise
+    finally:
+        if progress is not None:
+            progress.close()
+    print(result.describe())
+    return EXIT_OK if result.ok else EXIT_FAILED
 
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    handlers = {"solve": _cmd_solve, "simulate": _cmd_simulate, "validate": _cmd_validate, "bench": _cmd_bench}
+    handlers = {"solve": _cmd_solve, "simulate": _cmd_simulate, "validate": _cmd_validate, "bench": _cmd_bench,
+                "campaign": _cmd_campaign}
     try:
         return handlers[args.command](args)
     except ConvexGuidError as exc:
@@ -177,6 +279,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("convexguid: interrupted", file=sys.stderr)
         return 130
+    except MemoryError:  # a backstop: each family's size limit should refuse such a problem before it starts
+        print("convexguid: out of memory: the problem is too large for this machine; give a smaller problem "
+              "(e.g. fewer nodes or steps)", file=sys.stderr)
+        return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

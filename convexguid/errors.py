@@ -7,6 +7,8 @@ callers that do not know this package.
 
 from __future__ import annotations
 
+import reprlib
+
 
 class ConvexGuidError(Exception):
     """Base class of every error raised on purpose by convexguid."""
@@ -29,3 +31,32 @@ class BackendError(ConvexGuidError, KeyError):
 
 class SolverError(ConvexGuidError, RuntimeError):
     """A convex subproblem could not be solved (numerical failure of the backend)."""
+
+
+class OutputError(ConvexGuidError, OSError):
+    """An output (file or folder) cannot be written where it was asked for.
+
+    Raised before any work when the target is unusable (a folder where a file is wanted, a missing or
+    unwritable folder, a non-empty output folder without permission to replace it); raised after the work
+    when the results could not be moved into place, and then the message says where they are.
+    """
+
+
+def value_text(value: object, limit: int = 100) -> str:
+    """``value`` as an error message shows it: its repr on one line, cut to ``limit`` characters.
+
+    The repr is bounded before it is built (:mod:`reprlib`: a few levels, a few items each), so a huge value
+    (a YAML alias bomb expands to billions of items) costs no more to show than a small one.
+    """
+    text = " ".join(_BOUNDED_REPR.repr(value).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _bounded_repr() -> reprlib.Repr:
+    shown = reprlib.Repr()
+    shown.maxlevel, shown.maxstring, shown.maxother = 4, 80, 80
+    shown.maxlist = shown.maxtuple = shown.maxdict = shown.maxset = 10
+    return shown
+
+
+_BOUNDED_REPR = _bounded_repr()

@@ -5,7 +5,8 @@ through the engine's check-repair loop). A family's figures are a frozen datacla
 :class:`Figures`, registered on its :class:`~convexguid.families.base.Family`; their fields are the keys the
 summary JSON adds after the common ones, in field order.
 
-This module imports numpy only (the families' figures modules import it at registry load).
+This module imports numpy only (the families' figures modules import it at registry load); files are written
+through :mod:`convexguid.outputs` (atomically). ``write_text_atomic`` is re-exported from there.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from convexguid.outputs import atomic_file, write_text_atomic
 
 if TYPE_CHECKING:
     from convexguid.scp.problem import ProgramSize
@@ -94,7 +97,8 @@ class Trajectory:
     columns: dict[str, np.ndarray]
 
     def write_csv(self, path: Path) -> None:
-        with open(path, "w", newline="") as fh:
+        """Write the samples as CSV (header ``t_s`` and the columns), atomically (:func:`atomic_file`)."""
+        with atomic_file(path, "w", newline="") as fh:
             writer = csv.writer(fh)
             writer.writerow(["t_s", *self.columns])
             data = np.column_stack([self.t, *self.columns.values()])
@@ -104,7 +108,7 @@ class Trajectory:
 
 @dataclass
 class Solution:
-    """Everything a solve produces. :meth:`summary` is the machine-readable contract of design.md.
+    """Everything a solve produces. :meth:`summary` is the machine-readable contract (docs/cli.md, "Summary JSON").
 
     Build one with :func:`make_solution` or :func:`planned_solution`.
     """
@@ -219,11 +223,3 @@ def _finite(value: float | None) -> float | None:
     if value is None or not math.isfinite(value):
         return None
     return float(value)
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary sibling and rename it over ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)

@@ -4,7 +4,7 @@ A solver's "optimal" says nothing about what happens between the nodes. Here the
 planned control is fed to the equations of motion, integrated with SciPy at tight
 tolerance, and every path constraint is evaluated on a dense grid; the final state
 is compared with the target. The result fills the ``verification`` object of the
-summary JSON (see design.md).
+summary JSON (docs/cli.md).
 """
 
 from __future__ import annotations

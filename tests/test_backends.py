@@ -1,4 +1,4 @@
-"""Backend registry and the conic-program interface (design.md: backends by name)."""
+"""Backend registry and the conic-program interface (backends by name)."""
 
 import numpy as np
 import pytest

@@ -17,7 +17,7 @@ from convexguid.errors import SpecError
 from convexguid.families import get_family
 from convexguid.families.quaternion_attitude.figures import ConeGeometry
 from convexguid.report import comparisons
-from convexguid.report.comparisons import TABLES, check_comparisons, comparison_sections
+from convexguid.report.comparisons import TABLES, check_comparisons, comparison_sections, comparison_timings
 from convexguid.report.validation import CaseResult, link_overrides, run_order
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution
@@ -188,14 +188,26 @@ def test_multicone_table_is_rendered_from_the_results_alone(monkeypatch):
     monkeypatch.setattr("convexguid.api.solve", no_solve)
     lines = comparison_sections(_multicone_results())
     assert lines[1] == f"## {TABLES['multicone'].title}"
-    assert _rows(lines) == [
-        ["path transfer (paper's planner)", "113.000", "0.200", "4.562", "0.6043", "yes"],
-        ["SCP, minimum time", "43.152", "4.000", "0.022", "0.5685", "yes"],
-        ["SCP, minimum energy (t_f = 1.3 x minimum time)", "56.098", "7.500", "0.020", "0.08114", "yes"]]
+    assert _rows(lines) == [  # no compute times: they change from run to run (timings file)
+        ["path transfer (paper's planner)", "113.000", "4.562", "0.6043", "yes"],
+        ["SCP, minimum time", "43.152", "0.022", "0.5685", "yes"],
+        ["SCP, minimum energy (t_f = 1.3 x minimum time)", "56.098", "0.020", "0.08114", "yes"]]
     text = "\n".join(lines)
-    assert "is 61.8% shorter than the path-transfer plan and takes 20.00x its planning time" in text
+    assert "is 61.8% shorter than the path-transfer plan (the paper reports" in text
+    assert "planning time [s]" not in text and "x the path-transfer planning time" not in text
     assert ("body1 0.093 deg, body2 0.020 deg, body3 21.191 deg, body4 42.602 deg; cones 1 and 2 "
             "(20 and 15 deg half-angles) are broken.") in text
+
+
+def test_compute_times_go_to_the_timings_lines_only():
+    """The timed columns (a row's ``figures`` may name one, as path transfer's planning time) and the ratio
+    sentence are rendered by comparison_timings, for the timings file."""
+    lines = comparison_timings(_multicone_results())
+    assert lines[1] == f"## {TABLES['multicone'].title}"
+    assert _rows(lines) == [["path transfer (paper's planner)", "0.200"], ["SCP, minimum time", "4.000"],
+                            ["SCP, minimum energy (t_f = 1.3 x minimum time)", "7.500"]]
+    assert "The SCP's minimum-time plan takes 20.00x the path-transfer planning time." in "\n".join(lines)
+    assert comparison_timings(_multicone_results((1,))) == []
 
 
 def test_rows_follow_their_roles_and_sentences_need_them():
@@ -217,10 +229,10 @@ def test_forbidden_attitude_table_uses_the_rows_figures():
         _result(tm, _solution(tm, wall_time_s=6.0, checks=[forbidden], maneuver_time_s=85.32, energy=60.61))]
     lines = comparison_sections(results)
     assert _rows(lines) == [
-        ["potential-function controller (Fig. 3 case, closed loop, disturbed)", "196.80", "11.52", "23.52", "0.770",
-         "yes"],
-        ["SCP, minimum time", "85.32", "60.61", "10.04", "6.000", "yes"],
-        ["SCP, minimum energy at the controller's maneuver time", "196.80", "1.818", "10.04", "6.500", "yes"]]
+        ["potential-function controller (Fig. 3 case, closed loop, disturbed)", "196.80", "11.52", "23.52", "yes"],
+        ["SCP, minimum time", "85.32", "60.61", "10.04", "yes"],
+        ["SCP, minimum energy at the controller's maneuver time", "196.80", "1.818", "10.04", "yes"]]
+    assert [row[1] for row in _rows(comparison_timings(results))] == ["0.770", "6.000", "6.500"]
     assert ("uses 84.2% less energy (1.818 against 11.52 N^2 m^2 s); the minimum-time plan finishes in 85.3 s."
             in "\n".join(lines))
 

@@ -4,7 +4,7 @@ The IPOPT reference (:mod:`convexguid.families.quaternion_attitude.reference`) w
 the Hermite-Simpson defects, the cone cosines and the forbidden-attitude rows again in CasADi;
 its optima must satisfy the numpy transcription's constraints
 (:class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`), respect bounds that
-hold for any feasible slew, and clear every cone of the multi-cone scenario of design.md.
+hold for any feasible slew, and clear every cone of the multi-cone scenario of docs/parameters.md.
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ def test_energy_decreases_with_the_final_time():
 
 
 def test_multicone_minimum_time_clears_every_cone():
-    """design.md's four-cone scenario from the (cone-crossing) eigenaxis guess, K = 30."""
+    """The four-cone scenario (docs/parameters.md) from the (cone-crossing) eigenaxis guess, K = 30."""
     case = build_case(load_problem(MULTICONE, []))
     intervals = 30
     guess, tf_guess = eigenaxis_start(case, intervals)

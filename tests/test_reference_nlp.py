@@ -1,6 +1,6 @@
 """Cross-check the SCP against an independent NLP solve (CasADi + IPOPT) of the same transcription.
 
-A solver status alone proves nothing (design.md, "Tests"), so the SCP's optimum of the
+A solver status alone proves nothing (the project's rule for tests), so the SCP's optimum of the
 flat-attitude transcription (Cai, Zhu, Zeng 2018, N = 32) is compared with IPOPT's, whose
 maps are written independently in CasADi (:mod:`convexguid.families.flat_attitude.reference`), in three
 regimes: the paper case (Table 1, no path constraint active), a 25 s slew (the torque box

@@ -1,4 +1,4 @@
-"""Exact tests of convexguid.rotations against closed forms (design.md, test level 1)."""
+"""Exact tests of convexguid.rotations against closed forms (test level 1: exact)."""
 
 from __future__ import annotations
 

@@ -6,6 +6,7 @@ inertial (see :mod:`convexguid.rotations`); rates are body-frame, in rad/s.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -70,3 +71,35 @@ def rigid_body_rhs_fast(inertia: np.ndarray, torque: Callable[[float], np.ndarra
                          j31 * e1 + j32 * e2 + j33 * e3])
 
     return rhs
+
+
+def min_slew_time(inertia: np.ndarray, torque_norm_max: float, angle_rad: float, momentum0: float = 0.0,
+                  momentum_f: float = 0.0) -> float:
+    """A lower bound on the duration of any maneuver through the rotation angle ``angle_rad``, s.
+
+    The angular momentum changes at most at the rate ``torque_norm_max`` (the largest Euclidean norm of an
+    admissible torque, N m), so from ``momentum0`` at the start and back to ``momentum_f`` at the end (N m s)
+    :math:`|H(t)| \\le \\min(H_0 + \\tau t,\\; H_f + \\tau (T - t))`; the body rate is at most
+    :math:`|H| / \\lambda_{min}(I)` and the rotation angle at most its integral. The bound is the shortest
+    ``T`` whose integral reaches the angle; rest to rest it is the bang-bang time
+    :math:`T = 2\\sqrt{\\theta \\lambda_{min} / \\tau}`. It holds for every path (not only the eigenaxis one).
+    """
+    needed = angle_rad * float(np.linalg.eigvalsh(inertia)[0])  # integral of |H| dt the rotation needs
+    tau, a, b = torque_norm_max, momentum0, momentum_f
+
+    def reachable(T: float) -> float:  # integral over [0, T] of min(a + tau t, b + tau (T - t))
+        cross = min(max((b - a + tau * T) / (2 * tau), 0.0), T)
+        return a * cross + 0.5 * tau * cross**2 + b * (T - cross) + 0.5 * tau * (T - cross) ** 2
+
+    if needed <= 0.0:
+        return 0.0
+    if a == b == 0.0:
+        return 2.0 * math.sqrt(needed / tau)
+    high = 1.0
+    while reachable(high) < needed:
+        high *= 2.0
+    low = 0.0
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if reachable(mid) < needed else (low, mid)
+    return low

@@ -17,6 +17,7 @@ from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from convexguid.sizes import DEFAULT_MEMORY_LIMIT_BYTES, SizeEstimate, check_size
 from convexguid.spec.common import ProblemBase
 
 if TYPE_CHECKING:
@@ -55,8 +56,18 @@ class Family:
     report_section : callable or None
         ``report_section(spec, solution) -> list[str]``: markdown the validation report adds under the case (e.g.
         the paper's tables beside the family's figures); it renders, it computes nothing. None: nothing extra.
+        It must not show compute times (the committed report is the same on every run): those go to
+        ``timing_section``.
+    timing_section : callable or None
+        ``timing_section(spec, solution) -> list[str]``: markdown of the case's compute times for the validation
+        timings file (:mod:`convexguid.report.timings`, not committed), e.g. LPMPC update times. None: nothing.
     bench : callable or None
         ``bench(problem_path, args) -> int`` (exit code) for ``convexguid bench``; None if the family has none.
+    estimate_size : callable or None
+        ``estimate_size(spec) -> SizeEstimate`` (:mod:`convexguid.sizes`): the peak memory of a run estimated from
+        the spec alone (cheap: no program is built), with the key that drives it. None: no limit.
+    memory_limit_bytes : float
+        The most memory :meth:`check_size` lets a run of this family need.
     """
 
     name: str
@@ -69,7 +80,16 @@ class Family:
     key_figures: tuple[tuple[str, str], ...] = ()
     planning_setup: Callable[[ProblemBase], PlanningSetup] | None = None
     report_section: Callable[[ProblemBase, Solution], list[str]] | None = None
+    timing_section: Callable[[ProblemBase, Solution], list[str]] | None = None
     bench: Callable[[str | PathLike[str], argparse.Namespace], int] | None = None
+    estimate_size: Callable[[ProblemBase], SizeEstimate] | None = None
+    memory_limit_bytes: float = DEFAULT_MEMORY_LIMIT_BYTES
+
+    def check_size(self, spec: ProblemBase) -> None:
+        """Refuse ``spec`` (one-line SpecError naming the key, the estimate and the limit) if its estimated memory
+        is above :attr:`memory_limit_bytes`; nothing without :attr:`estimate_size`."""
+        if self.estimate_size is not None:
+            check_size(spec.source, self.name, self.estimate_size(spec), self.memory_limit_bytes)
 
 
 def lazy(target: str) -> Callable:

@@ -486,7 +486,7 @@ def plan_path_transfer(problem: PathTransferProblem) -> PathTransferResult:
 
 
 def multicone_scenario(**overrides: object) -> PathTransferProblem:
-    """The project's seed-003 scenario (paper Table 1 was lost; design.md parameters), with overrides.
+    """The project's seed-003 scenario (paper Table 1 was lost; docs/parameters.md), with overrides.
 
     Boresight body +z; inertia diag(10, 12, 15) kg m^2; 0.1 N m; 3 deg/s; identity to a 160 deg rotation about
     (1, -1, 0.5); four bright bodies with half-angles 20, 15, 12, 20 deg. ``overrides`` go to

@@ -8,7 +8,9 @@ under a table are computed from the rows present, found by their ``role`` (a sen
 is left out). A column shows a figure of the solution (:meth:`~convexguid.solution.Solution.figure`, n/a where
 the solution does not carry it) or a value computed from the solution; a row's ``figures`` names the figure
 standing for a column where the default does not apply (e.g. a simulated controller's maneuver time), checked
-against the fields of its family's figures type before anything is solved. Tables:
+against the fields of its family's figures type before anything is solved. Columns of compute times are
+``timed``: :func:`comparison_sections` leaves them out (the committed report is the same on every run) and
+:func:`comparison_timings` renders them, with the sentences that use them, for the timings file. Tables:
 
 * ``multicone`` (Wang, Xu, Li, Table 2 layout): maneuver time, planning time, smallest cone margin on the dense
   grid, energy, verified; roles ``baseline`` (the paper's planner) and ``min_time``.
@@ -31,12 +33,16 @@ from convexguid.spec import ProblemSpec
 
 @dataclass(frozen=True)
 class Column:
-    """One column: ``default`` gives the value from a solution unless the row's ``figures`` names a figure."""
+    """One column: ``default`` gives the value from a solution unless the row's ``figures`` names a figure.
+
+    A ``timed`` column holds compute times: it goes to the timings file, not to the report.
+    """
 
     id: str
     header: str
     fmt: str
     default: Callable[[Solution], float | None]
+    timed: bool = False
 
 
 @dataclass(frozen=True)
@@ -51,13 +57,17 @@ class Row:
 
 @dataclass(frozen=True)
 class Table:
-    """A cross-method table: heading, text above it, columns (then ``verified``), sentences below it."""
+    """A cross-method table: heading, text above it, columns (then ``verified``), sentences below it.
+
+    ``timing_notes`` are the sentences about its ``timed`` columns (timings file only).
+    """
 
     id: str
     title: str
     intro: tuple[str, ...]
     columns: tuple[Column, ...]
     notes: Callable[[dict[str, Row], list[Row]], list[str]]
+    timing_notes: Callable[[dict[str, Row], list[Row]], list[str]] | None = None
 
 
 def _figure(name: str) -> Callable[[Solution], float | None]:
@@ -90,19 +100,17 @@ def _energy(fmt: str) -> Column:
 
 
 def _compute_time(header: str, fmt: str) -> Column:
-    return Column("compute_time", header, fmt, lambda sol: _number(sol.wall_time_s))
+    return Column("compute_time", header, fmt, lambda sol: _number(sol.wall_time_s), timed=True)
 
 
 def _multicone_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
     text = []
     base, fast = roles.get("baseline"), roles.get("min_time")
-    if base and fast and None not in (base.values["maneuver_time"], fast.values["maneuver_time"],
-                                      base.values["compute_time"], fast.values["compute_time"]):
+    if base and fast and None not in (base.values["maneuver_time"], fast.values["maneuver_time"]):
         cut = 1 - fast.values["maneuver_time"] / base.values["maneuver_time"]
-        ratio = fast.values["compute_time"] / base.values["compute_time"]
-        text.append(f"The SCP's minimum-time plan is {100 * cut:.1f}% shorter than the path-transfer plan and takes "
-                    f"{ratio:.2f}x its planning time (the paper reports path transfer cutting the maneuver time by "
-                    "about 85% and the planning time by about 33% against RDRP, which is not reimplemented here).")
+        text.append(f"The SCP's minimum-time plan is {100 * cut:.1f}% shorter than the path-transfer plan (the paper "
+                    "reports path transfer cutting the maneuver time by about 85% and the planning time by about 33% "
+                    "against RDRP, which is not reimplemented here; the planning times are in the timings file).")
     clearance = next((r.solution.figures for r in rows if isinstance(r.solution.figures, QuaternionAttitudeFigures)
                       and r.solution.figures.eigenaxis_min_angle_deg), None)
     if clearance is not None:
@@ -110,8 +118,18 @@ def _multicone_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
         text.append("The eigenaxis slew passes this close to each cone's direction: "
                     + ", ".join(f"{k} {v:.3f} deg" for k, v in angles.items()) + _broken_cones(clearance) + ".")
     text.append("Margins are measured on the dense SciPy re-propagation.")
-    return ["", " ".join(text),
-            "Compute times are single runs of `convexguid validate`; `convexguid bench` repeats them against IPOPT."]
+    return ["", " ".join(text)]
+
+
+def _multicone_timing_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
+    base, fast = roles.get("baseline"), roles.get("min_time")
+    text = []
+    if base and fast and base.values["compute_time"] and fast.values["compute_time"] is not None:
+        ratio = fast.values["compute_time"] / base.values["compute_time"]
+        text.append(f"The SCP's minimum-time plan takes {ratio:.2f}x the path-transfer planning time.")
+    text.append("Compute times are single runs of `convexguid validate`; `convexguid bench` repeats them against "
+                "IPOPT.")
+    return ["", " ".join(text)]
 
 
 def _broken_cones(figures: QuaternionAttitudeFigures) -> str:
@@ -166,7 +184,7 @@ TABLES: dict[str, Table] = {table.id: table for table in (
           (_maneuver_time(".3f"), _compute_time("planning (compute) time [s]", ".3f"),
            Column("cone_margin", "smallest cone margin [deg]", ".3f", _figure("min_cone_margin_deg")),
            _energy(".4g")),
-          _multicone_notes),
+          _multicone_notes, _multicone_timing_notes),
     Table("forbidden_attitude",
           "Forbidden attitude: potential-function controller against the SCP planner (Guo, Li, Ma 2011)",
           ("Same spacecraft, boundary attitudes and limits (|u_i| <= 0.5 N m, |w_i| <= 1.91 deg/s, theta_b > 10 deg); "
@@ -216,7 +234,32 @@ def check_comparisons(specs: Sequence[ProblemSpec]) -> None:
 
 
 def comparison_sections(results: Sequence) -> list[str]:
-    """Markdown lines of every table with at least two rows among ``results`` (validation ``CaseResult``\\ s)."""
+    """Markdown lines of every table with at least two rows among ``results`` (validation ``CaseResult``\\ s),
+    without the ``timed`` columns."""
+    lines: list[str] = []
+    for table, rows in _tables(results):
+        lines += render_table(table, rows)
+    return lines
+
+
+def comparison_timings(results: Sequence) -> list[str]:
+    """The ``timed`` columns of the same tables (label, times, then the timing sentences), for the timings file."""
+    lines: list[str] = []
+    for table, rows in _tables(results):
+        timed = [c for c in table.columns if c.timed]
+        if not timed:
+            continue
+        lines += ["", f"## {table.title}", "", "| method | " + " | ".join(c.header for c in timed) + " |",
+                  "|---|" + "---|" * len(timed)]
+        lines += [f"| {row.label} | " + " | ".join(_cell(row.values[c.id], c.fmt) for c in timed) + " |"
+                  for row in rows]
+        if table.timing_notes is not None:
+            lines += table.timing_notes(_roles(rows), rows)
+    return lines
+
+
+def _tables(results: Sequence) -> list[tuple[Table, list[Row]]]:
+    """Each table with at least two rows among ``results``, its rows in role order."""
     rows: dict[str, list[Row]] = {}
     for r in results:
         entry = r.spec.reference.comparison if r.spec.reference is not None else None
@@ -226,11 +269,8 @@ def comparison_sections(results: Sequence) -> list[str]:
         values = {c.id: (_figure(figures[c.id]) if c.id in figures else c.default)(r.solution)
                   for c in TABLES[entry.table].columns}
         rows.setdefault(entry.table, []).append(Row(entry.label, entry.role, r.solution, values))
-    lines: list[str] = []
-    for table_id, table in TABLES.items():
-        if len(rows.get(table_id, ())) >= 2:
-            lines += render_table(table, sorted(rows[table_id], key=_role_order))
-    return lines
+    return [(table, sorted(rows[table_id], key=_role_order)) for table_id, table in TABLES.items()
+            if len(rows.get(table_id, ())) >= 2]
 
 
 ROLE_ORDER = ("baseline", "min_time", "min_energy", "tracked")
@@ -245,18 +285,25 @@ def _cell(value: float | None, fmt: str) -> str:
     return "n/a" if value is None else format(value, fmt)
 
 
-def render_table(table: Table, rows: list[Row]) -> list[str]:
-    """One table: heading, intro, one line per row (in the given order), the sentences of its roles."""
-    lines = ["", f"## {table.title}", ""]
-    for paragraph in table.intro:
-        lines += [paragraph, ""]
-    lines += ["| method | " + " | ".join(c.header for c in table.columns) + " | verified |",
-              "|---|" + "---|" * len(table.columns) + "---|"]
-    for row in rows:
-        cells = " | ".join(_cell(row.values[c.id], c.fmt) for c in table.columns)
-        lines.append(f"| {row.label} | {cells} | {'yes' if row.solution.ok else 'NO'} |")
-    roles = {}
+def _roles(rows: list[Row]) -> dict[str, Row]:
+    """The first row of each role."""
+    roles: dict[str, Row] = {}
     for row in rows:
         if row.role is not None:
             roles.setdefault(row.role, row)
-    return lines + table.notes(roles, rows)
+    return roles
+
+
+def render_table(table: Table, rows: list[Row]) -> list[str]:
+    """One table without its ``timed`` columns: heading, intro, one line per row (in the given order), the
+    sentences of its roles."""
+    columns = [c for c in table.columns if not c.timed]
+    lines = ["", f"## {table.title}", ""]
+    for paragraph in table.intro:
+        lines += [paragraph, ""]
+    lines += ["| method | " + " | ".join(c.header for c in columns) + " | verified |",
+              "|---|" + "---|" * len(columns) + "---|"]
+    for row in rows:
+        cells = " | ".join(_cell(row.values[c.id], c.fmt) for c in columns)
+        lines.append(f"| {row.label} | {cells} | {'yes' if row.solution.ok else 'NO'} |")
+    return lines + table.notes(_roles(rows), rows)

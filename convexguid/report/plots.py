@@ -1,5 +1,6 @@
 """Plots of a solution: the family's own figures (:attr:`convexguid.families.base.Family.plot`), and the
-labelling and saving helper they share.
+labelling and saving helpers they share (every figure is written atomically: a temporary file renamed into
+place).
 
 matplotlib is imported only by the families' plot modules, when something is plotted.
 """
@@ -9,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from convexguid.families import get_family
+from convexguid.outputs import atomic_file
 from convexguid.solution import Solution
 
 
@@ -20,14 +22,23 @@ def plot_solution(solution: Solution, out_dir: Path) -> list[Path]:
 
 def save_figure(fig, ax, title: str, ylabel: str, path: Path, xlabel: str = "time [s]") -> Path:
     """Label an axis (a time history unless ``xlabel`` says otherwise), write the figure to ``path``, close it."""
-    import matplotlib.pyplot as plt
-
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    return write_figure(fig, path)
+
+
+def write_figure(fig, path: Path) -> Path:
+    """Write ``fig`` to ``path`` atomically (:func:`~convexguid.outputs.atomic_file`; the format from the
+    suffix, e.g. ``.png``) and close it; return ``path``."""
+    import matplotlib.pyplot as plt
+
+    try:
+        with atomic_file(path, "wb") as fh:
+            fig.savefig(fh, format=Path(path).suffix.lstrip(".") or "png")
+    finally:
+        plt.close(fig)
     return path

@@ -5,7 +5,13 @@ difference | within tolerance), the family's key figures, the dense verification
 figures and the plots (:class:`~convexguid.families.base.Family` gives the figures,
 the wording of the verification and the plots).
 Quantities under ``reference.values`` are compared with their relative tolerance;
-those under ``reference.max_values`` are upper limits (e.g. SCP iterations).
+those under ``reference.max_values`` are upper limits (e.g. SCP iterations). A problem named on the command line
+without a ``reference:`` block is solved and verified, and the report says there is nothing to compare.
+
+The report holds only what is the same on every run, so re-running on an unchanged tree leaves it unchanged;
+compute times go to the timings file beside it (:mod:`convexguid.report.timings`, not committed). Output
+paths are checked before anything is solved; each case's figures folder is replaced as a whole
+(:func:`~convexguid.outputs.staged_folder`) and every file is written atomically.
 
 A case may take an input from another case's result (``boundary.tf_from: {problem, figure}``, see
 :meth:`~convexguid.spec.common.ProblemBase.input_links`): the runner solves the cases in an order where
@@ -24,9 +30,11 @@ from pathlib import Path
 from convexguid.api import solve
 from convexguid.errors import SpecError
 from convexguid.families import get_family
-from convexguid.report.comparisons import check_comparisons, comparison_sections
+from convexguid.outputs import check_output_file, check_output_folder, staged_folder, write_text_atomic
+from convexguid.report.comparisons import check_comparisons, comparison_sections, comparison_timings
 from convexguid.report.plots import plot_solution
-from convexguid.solution import Solution, write_text_atomic
+from convexguid.report.timings import render_timings, timings_path
+from convexguid.solution import Solution
 from convexguid.spec import ProblemSpec, load_problem
 
 DEFAULT_PROBLEMS_DIR = Path("problems")
@@ -53,12 +61,19 @@ class CaseResult:
     figures: tuple[Path, ...]
 
     @property
+    def compared(self) -> bool:
+        """The problem file has a ``reference:`` block (else the case is only solved and verified)."""
+        return self.spec.reference is not None
+
+    @property
     def ok(self) -> bool:
         return self.solution.ok and all(r.ok for r in self.rows)
 
 
 def compare(spec: ProblemSpec, solution: Solution) -> tuple[Comparison, ...]:
-    """Rows comparing the solution's summary with ``spec.reference``."""
+    """Rows comparing the solution's summary with ``spec.reference`` (none without a reference)."""
+    if spec.reference is None:
+        return ()
     ref, summary = spec.reference, solution.summary()
     rows = []
     for quantity, paper in ref.values.items():
@@ -77,9 +92,13 @@ def compare(spec: ProblemSpec, solution: Solution) -> tuple[Comparison, ...]:
 
 
 def run_case(path: Path, figure_root: Path, overrides: Sequence[str] = ()) -> CaseResult:
+    """Solve one case, replace its figures folder ``figure_root/<name>`` as a whole, compare it."""
     spec = load_problem(path, overrides)
     solution = solve(spec)
-    figures = tuple(plot_solution(solution, figure_root / spec.name))
+    folder = figure_root / spec.name
+    with staged_folder(folder, replace=True) as staging:
+        staged = plot_solution(solution, staging)
+    figures = tuple(folder / p.relative_to(staging) for p in staged)
     return CaseResult(spec, solution, compare(spec, solution), figures)
 
 
@@ -154,13 +173,32 @@ def reference_problems(directory: Path = DEFAULT_PROBLEMS_DIR) -> list[Path]:
     return [p for p in sorted(directory.glob("*.yaml")) if load_problem(p).reference is not None]
 
 
+def check_report_outputs(report: str | Path) -> None:
+    """Raise :class:`~convexguid.errors.OutputError` unless the report, its timings file and its figures folder
+    can be written (before anything is solved; nothing is created)."""
+    report = Path(report)
+    check_output_file(report, "report")
+    check_output_file(timings_path(report), "timings file")
+    check_output_folder(report.parent / "figures", overwrite=True)
+
+
 def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_REPORT) -> list[CaseResult]:
     """Run the reference cases (default: every file in ``problems/`` with a reference) and write the report.
 
     Cases are solved in :func:`run_order` (linked inputs resolved by :func:`link_overrides`); the results,
-    the report's rows and its comparison tables keep the order of ``problems``.
+    the report's rows and its comparison tables keep the order of ``problems``. The compute times go to
+    :func:`~convexguid.report.timings.timings_path` beside the report.
+
+    Raises
+    ------
+    OutputError
+        Before anything is solved, if the report, the timings file or the figures folder cannot be written there.
+    OSError
+        If writing fails after the cases were solved.
     """
     report = Path(report)
+    timings = timings_path(report)
+    check_report_outputs(report)
     paths = [Path(p) for p in problems] or reference_problems()
     specs = [load_problem(p) for p in paths]
     order = run_order(specs)
@@ -171,7 +209,8 @@ def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_R
         results[i] = run_case(paths[i], report.parent / "figures", link_overrides(specs[i], solved))
         solved[specs[i].name] = results[i].solution
     ordered = [results[i] for i in range(len(paths))]
-    write_text_atomic(report, render(ordered, report.parent, comparison_sections(ordered)))
+    write_text_atomic(report, render(ordered, report.parent, comparison_sections(ordered), timings.name))
+    write_text_atomic(timings, render_timings(ordered, comparison_timings(ordered), report.name))
     return ordered
 
 
@@ -192,16 +231,23 @@ def _fmt_any(value: object) -> str:
     return str(value)
 
 
-def render(results: list[CaseResult], base: Path, comparisons: Sequence[str] = ()) -> str:
-    """The markdown report; ``comparisons`` are cross-method sections put after the summary table."""
+def render(results: list[CaseResult], base: Path, comparisons: Sequence[str] = (),
+           timings_name: str = "the timings file") -> str:
+    """The markdown report; ``comparisons`` are cross-method sections put after the summary table.
+
+    It shows no compute time (they are in ``timings_name``, beside it), so it is the same on every run.
+    """
     lines = ["# convexguid validation report", "",
              "Generated by `convexguid validate`: every problem file with a `reference:` block is solved, its plan",
-             "re-propagated with SciPy on a dense grid, and its figures set beside the published ones.", "",
+             "re-propagated with SciPy on a dense grid, and its figures set beside the published ones.",
+             f"Compute times change from run to run, so they are not here: `convexguid validate` writes them to "
+             f"`{timings_name}` beside this report (not committed).", "",
              "| case | status | verification | matches paper |", "|---|---|---|---|"]
     for r in results:
         v = r.solution.verification
+        matches = ("yes" if r.ok else "NO") if r.compared else "no reference"
         lines.append(f"| {r.spec.name} | {r.solution.status} | {'passed' if v and v.passed else 'FAILED'} | "
-                     f"{'yes' if r.ok else 'NO'} |")
+                     f"{matches} |")
     lines += list(comparisons)
     for r in results:
         lines += _case_section(r, base)
@@ -210,7 +256,12 @@ def render(results: list[CaseResult], base: Path, comparisons: Sequence[str] = (
 
 def _case_section(r: CaseResult, base: Path) -> list[str]:
     ref, sol = r.spec.reference, r.solution
-    lines = ["", f"## {r.spec.name}", "", f"*{' '.join(ref.citation.split())}*, {ref.table}.", ""]
+    lines = ["", f"## {r.spec.name}", ""]
+    if ref is not None:
+        lines += [f"*{' '.join(ref.citation.split())}*, {ref.table}.", ""]
+    else:
+        lines += [f"{r.spec.source} has no `reference:` block: the case is solved and verified, and there is "
+                  "nothing to compare.", ""]
     if r.spec.notes:
         lines += [f"Notes: {' '.join(r.spec.notes.split())}", ""]
     if r.rows:
@@ -220,15 +271,14 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
         paper = _fmt(row.paper) if row.rel_diff is not None or row.ours is None else f"limit {_fmt(row.paper)}"
         lines.append(f"| {row.quantity} | {paper} | {_fmt(row.ours)} | {rel} ({row.tolerance}) | "
                      f"{'yes' if row.ok else 'NO'} |")
-    if ref.notes:
+    if ref is not None and ref.notes:
         lines += ["", f"Reference notes: {' '.join(ref.notes.split())}"]
     if "scp_s" in sol.timing:
         lines += ["", f"Status `{sol.status}` after {sol.iterations} SCP iterations ({sol.message}); "
-                  f"solver `{sol.solver}`; wall time {sol.wall_time_s:.3f} s (SCP {sol.timing['scp_s']:.3f} s, "
-                  f"of which convex solver {sol.timing.get('solver_s', float('nan')):.3f} s)."]
+                  f"solver `{sol.solver}`."]
     else:
         lines += ["", f"Status `{sol.status}` ({sol.message}); {sol.method} with `{sol.solver}`, "
-                  f"{sol.iterations} steps; wall time {sol.wall_time_s:.3f} s."]
+                  f"{sol.iterations} steps."]
     family, carried = get_family(sol.family), sol.figure_names()
     figures = [(label, sol.figure(key)) for key, label in family.key_figures if key in carried]
     if figures:

@@ -45,6 +45,7 @@ import numpy as np
 
 from convexguid.backends import make_backend
 from convexguid.backends.base import Backend, BackendResult
+from convexguid.progress import report
 from convexguid.scp.assembly import SubproblemAssembler
 from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
@@ -202,6 +203,7 @@ class SCPAlgorithm:
         if state.finished:
             return state
         s = self.settings
+        report("SCP phase-1 iteration" if self.phase1 else "SCP iteration", state.iteration + 1)
         state.iteration += 1
         hessian = None
         if self.curvature is not None and state.multipliers:

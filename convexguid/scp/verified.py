@@ -28,6 +28,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from convexguid.errors import SolverError
+from convexguid.progress import report
 from convexguid.scp.engine import Log, SCPAlgorithm
 from convexguid.scp.problem import NonconvexProgram, SCPSettings
 from convexguid.scp.state import SCPResult, merge_results
@@ -129,6 +130,7 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
     rounds: list[RepairRound] = []
     what = "first solve"
     for attempt in range(budget + 1):
+        report("dense check, round", attempt + 1)
         try:
             check = checker.check(program, result.x)
         except SolverError:

@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from convexguid.checks import finite_vector, inertia_matrix, unit_vector
 from convexguid.control.potential_function import ControlInfo, _cross
 from convexguid.errors import SpecError
+from convexguid.progress import report
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_normalize
 
 __all__ = [
@@ -231,6 +232,7 @@ def simulate(controller: AttitudeController, inertia: ArrayLike, q0: ArrayLike, 
     us = np.empty((n_steps + 1, 3))
     infos: list[ControlInfo] = []
     for k in range(n_steps + 1):
+        report("simulation step", k, n_steps)
         t = k * dt
         ys[k] = y
         u, info = controller.torque(t, y[:4], y[4:7], y[7:])

@@ -3,7 +3,7 @@ r"""Run a ``potential_function`` problem: closed-loop simulation, figures and ch
 The base case (the ``gains`` section) is simulated with
 :func:`convexguid.sim.reaction_wheel.simulate`; with a ``sweep`` section every ``theta_m`` of the sweep is
 simulated too (a case equal to the base case reuses its run). The result is packed into the
-:class:`~convexguid.solution.Solution` of the summary-JSON contract (design.md):
+:class:`~convexguid.solution.Solution` of the summary-JSON contract (docs/cli.md):
 
 * ``status``: ``converged`` when every run reaches the command, i.e. ends with an attitude error below
   :data:`ARRIVAL_TOL_DEG` (then :func:`~convexguid.sim.reaction_wheel.settling_time` for that band exists);

@@ -16,6 +16,7 @@ from typing import Protocol
 import numpy as np
 
 from convexguid.dynamics.mrp_attitude import rk4_step, shortest_mrp
+from convexguid.progress import report
 from convexguid.rotations import euler321_to_quat, mrp_to_quat, quat_to_euler321, quat_to_mrp
 from convexguid.sim.reaction_wheel import guo2011_disturbance
 
@@ -125,6 +126,7 @@ def fly(controller: Controller, x0: np.ndarray, t: np.ndarray, inertia: np.ndarr
     x[0] = x0
     command_time = 0.0
     for k in range(t.size - 1):
+        report(f"{controller.name} flight step", k, t.size - 1)
         measured = sensors.measure(x[k], rng)
         c0 = time.perf_counter()
         u[k] = np.clip(controller.command(float(t[k]), measured), -u_max, u_max)

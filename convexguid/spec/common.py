@@ -32,8 +32,9 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from convexguid.backends import check_backend_name
-from convexguid.errors import BackendError
+from convexguid.errors import BackendError, SpecError, value_text
 from convexguid.geometry import PointingCone
+from convexguid.spec.numbers import as_declared
 
 SPEC_CONFIG = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 """Model configuration of every spec model (unknown keys, coercion and inf/nan are errors)."""
@@ -195,9 +196,34 @@ InertiaMatrix = Annotated[tuple[tuple[float, float, float], ...], PlainValidator
 
 
 class SpecModel(BaseModel):
-    """Base of every spec model: frozen, strict, unknown keys rejected."""
+    """Base of every spec model: frozen, strict, unknown keys rejected.
+
+    A number the YAML reader took from scientific notation (``1e3``) reaches a string key as its text and an
+    integer key as an int (:func:`~convexguid.spec.numbers.as_declared`). Assigning to a field raises a one-line
+    :class:`~convexguid.errors.SpecError`: a spec is changed by loading it again with overrides.
+    """
 
     model_config = SPEC_CONFIG
+
+    @model_validator(mode="before")
+    @classmethod
+    def _numbers_as_declared(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        fields = cls.model_fields
+        return {key: as_declared(fields[key].annotation, value) if key in fields else value
+                for key, value in data.items()}
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name.startswith("_"):  # private attributes (the loader's ``_source``)
+            super().__setattr__(name, value)
+            return
+        raise SpecError(f"{type(self).__name__}.{name}: a problem spec is read-only (got {value_text(value)}); "
+                        "load the problem again with an override instead, e.g. "
+                        "convexguid.load_problem(path, ['key.path=value'])")
+
+    def __delattr__(self, name: str) -> None:
+        raise SpecError(f"{type(self).__name__}.{name}: a problem spec is read-only; keys cannot be removed")
 
 
 class TimeInterval(SpecModel):

@@ -18,8 +18,9 @@ import yaml
 from pydantic import BaseModel, ValidationError
 from pydantic_core import ErrorDetails
 
-from convexguid.errors import SpecError
+from convexguid.errors import SpecError, value_text
 from convexguid.spec.common import SPEC_ERROR_TYPE, ProblemBase
+from convexguid.spec.numbers import read_scientific_numbers
 
 ProblemSpec = ProblemBase
 """Type of every validated problem (each family subclasses it)."""
@@ -31,8 +32,24 @@ _PROBLEMS = {
 }
 
 
+MAX_EXPANDED_NODES = 100_000
+"""Most YAML nodes (scalars, lists, mappings) a document may have once its aliases are expanded; the largest
+problem file has under 200. Past it the document is refused (a "billion laughs" alias bomb expands to 10^9)."""
+
+
+class _TooLarge(Exception):
+    """The document's aliases expand past :data:`MAX_EXPANDED_NODES` nodes."""
+
+
 class _UniqueKeyLoader(yaml.SafeLoader):
-    """Safe YAML loader that rejects duplicate keys instead of keeping the last one."""
+    """Safe YAML loader that rejects duplicate keys instead of keeping the last one, reads scientific notation
+    (``1e3``) as numbers (:mod:`convexguid.spec.numbers`) and refuses documents whose aliases expand past
+    :data:`MAX_EXPANDED_NODES` nodes."""
+
+    def construct_document(self, node: yaml.Node) -> Any:
+        if _expanded_size(node, {}) > MAX_EXPANDED_NODES:
+            raise _TooLarge
+        return super().construct_document(node)
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
         seen: set[Any] = set()
@@ -45,8 +62,47 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep)
 
 
-def _yaml_load(text: str) -> Any:
-    return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+read_scientific_numbers(_UniqueKeyLoader)
+
+
+def _expanded_size(node: yaml.Node, sizes: dict[int, int]) -> int:
+    """Nodes under ``node`` (itself included) with every alias expanded, counted once per distinct node
+    (``sizes``, by node id); a node that contains itself counts as more than :data:`MAX_EXPANDED_NODES`."""
+    key = id(node)
+    if key in sizes:
+        return sizes[key]
+    sizes[key] = MAX_EXPANDED_NODES + 1  # until counted: an alias back to a node being counted is a cycle
+    children: list[yaml.Node] = []
+    if isinstance(node, yaml.SequenceNode):
+        children = node.value
+    elif isinstance(node, yaml.MappingNode):
+        children = [part for pair in node.value for part in pair]
+    total = 1
+    for child in children:
+        total += _expanded_size(child, sizes)
+        if total > MAX_EXPANDED_NODES:
+            break
+    sizes[key] = total
+    return total
+
+
+def _yaml_load(text: str, where: str) -> Any:
+    """The YAML document ``text``; ``where`` (the file, or the file and key of an override) starts the messages.
+
+    Raises
+    ------
+    yaml.YAMLError
+        On a syntax error.
+    SpecError
+        If the aliases expand past :data:`MAX_EXPANDED_NODES` nodes or the nesting is too deep to read.
+    """
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except _TooLarge:
+        raise SpecError(f"{where}: YAML aliases expand to more than {MAX_EXPANDED_NODES} values or refer to "
+                        "themselves; write the values out instead of nesting aliases") from None
+    except RecursionError:
+        raise SpecError(f"{where}: YAML nested too deeply to read; a problem file nests a few levels") from None
 
 
 def _one_line(text: str, limit: int = 100) -> str:
@@ -55,7 +111,13 @@ def _one_line(text: str, limit: int = 100) -> str:
 
 
 def _dotted(loc: Sequence[str | int]) -> str:
-    return ".".join(str(part) for part in loc)
+    return ".".join(_key_text(part) for part in loc)
+
+
+def _key_text(key: object) -> str:
+    """A key as a message shows it: as is when it is a plain word, else quoted (a key may hold a line break)."""
+    text = str(key)
+    return text if text and text.isprintable() and not any(c.isspace() for c in text) else value_text(key)
 
 
 def load_problem(path: str | PathLike[str], overrides: Sequence[str] = ()) -> ProblemSpec:
@@ -79,6 +141,21 @@ def load_problem(path: str | PathLike[str], overrides: Sequence[str] = ()) -> Pr
         If the file cannot be read or parsed, an override does not apply, or validation fails.
     """
     source = str(path)
+    data = read_yaml_mapping(path, "a problem file is a mapping of keys such as name, family, spacecraft")
+    return parse_problem(apply_overrides(data, overrides, source), source)
+
+
+def read_yaml_mapping(path: str | PathLike[str], hint: str) -> dict[str, Any]:
+    """Read a YAML file whose top level is a mapping (duplicate keys rejected).
+
+    ``hint`` ends the message when the top level is not a mapping (what the file should be).
+
+    Raises
+    ------
+    SpecError
+        If the file cannot be read or parsed, or its top level is not a mapping.
+    """
+    source = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -88,16 +165,15 @@ def load_problem(path: str | PathLike[str], overrides: Sequence[str] = ()) -> Pr
         raise SpecError(f"{source}: cannot read file ({_one_line(reason)}); give a readable UTF-8 YAML file"
                         ) from None
     try:
-        data = _yaml_load(text)
+        data = _yaml_load(text, source)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
         what = _one_line(str(getattr(exc, "problem", None) or exc))
         raise SpecError(f"{source}: {where}YAML syntax error: {what}; fix the YAML syntax") from None
     if not isinstance(data, dict):
-        raise SpecError(f"{source}: top level is not a mapping (got {_one_line(repr(data))}); "
-                        "a problem file is a mapping of keys such as name, family, spacecraft")
-    return parse_problem(apply_overrides(data, overrides, source), source)
+        raise SpecError(f"{source}: top level is not a mapping (got {value_text(data)}); {hint}")
+    return data
 
 
 def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: str) -> dict[str, Any]:
@@ -132,7 +208,7 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
             raise SpecError(f"{source}: malformed override (got {override!r}); "
                             "write key.path=value, e.g. boundary.tf_s=25")
         try:
-            value = _yaml_load(raw)
+            value = _yaml_load(raw, f"{source}: {key}")
         except yaml.YAMLError:
             raise SpecError(f"{source}: {key}: override value is not valid YAML (got {raw!r}); "
                             "give a YAML number, string, list or mapping") from None
@@ -142,7 +218,7 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
             here = _dotted(parts[: depth + 1])
             if isinstance(node, dict):
                 if part not in node and not last:
-                    names = ", ".join(map(str, node)) or "none"
+                    names = ", ".join(map(_key_text, node)) or "none"
                     parent = _dotted(parts[:depth]) or "the top level"
                     raise SpecError(f"{source}: {here}: key does not exist (got override {override!r}); "
                                     f"existing keys under {parent}: {names}")
@@ -189,23 +265,29 @@ def parse_problem(data: Mapping[str, Any], source: str = "<dict>") -> ProblemSpe
 
     known = ", ".join(FAMILIES)
     if not isinstance(data, Mapping):
-        raise SpecError(f"{source}: top level is not a mapping (got {_one_line(repr(data))}); "
+        raise SpecError(f"{source}: top level is not a mapping (got {value_text(data)}); "
                         "give a mapping of keys such as name, family, spacecraft")
     if "family" not in data:
         raise SpecError(f"{source}: family: missing required key; known families: {known}")
     family = data["family"]
     model = FAMILIES[family].spec_model if isinstance(family, str) and family in FAMILIES else None
     if model is None:
-        raise SpecError(f"{source}: family: unknown family (got {_one_line(repr(family))}); "
+        raise SpecError(f"{source}: family: unknown family (got {value_text(family)}); "
                         f"known families: {known}")
     try:
         spec = model.model_validate(dict(data))
     except ValidationError as exc:
-        errors = exc.errors()
-        more = {1: "", 2: " (and 1 more problem)"}.get(len(errors), f" (and {len(errors) - 1} more problems)")
-        raise SpecError(f"{source}: {_describe(errors[0], model)}{more}") from None
+        raise SpecError(f"{source}: {describe_validation_error(exc, model)}") from None
     spec._source = source
     return spec
+
+
+def describe_validation_error(exc: ValidationError, model: type[BaseModel]) -> str:
+    """The first problem of ``exc`` (raised validating ``model``) on one line, ``path: problem (got value); hint``,
+    followed by how many more problems there are."""
+    errors = exc.errors()
+    more = {1: "", 2: " (and 1 more problem)"}.get(len(errors), f" (and {len(errors) - 1} more problems)")
+    return f"{_describe(errors[0], model)}{more}"
 
 
 def _describe(error: ErrorDetails, model: type[BaseModel]) -> str:
@@ -218,20 +300,20 @@ def _describe(error: ErrorDetails, model: type[BaseModel]) -> str:
         here = _dotted(loc)
         problem = ctx["problem"].replace("{here}", here + "." if here else "")
         path = _dotted(loc + tuple(ctx["key"]))
-        return f"{path}: {problem} (got {_one_line(repr(ctx.get('value', value)))}); {ctx['hint']}"
+        return f"{path}: {problem} (got {value_text(ctx.get('value', value))}); {ctx['hint']}"
     path = _dotted(loc) or "<top level>"
     if kind == "missing":
         return f"{path}: missing required key"
     if kind == "extra_forbidden":
         keys = _valid_keys(model, loc[:-1])
-        return f"{path}: unknown key (got {_one_line(repr(value))}); valid keys: {keys}"
+        return f"{path}: unknown key (got {value_text(value)}); valid keys: {keys}"
     if kind in ("model_type", "model_attributes_type", "dict_type"):
         sub = _valid_keys(model, loc)
         hint = f"give a mapping with keys: {sub}" if sub else "give a mapping"
-        return f"{path}: wrong type, expected a mapping (got {_one_line(repr(value))}); {hint}"
+        return f"{path}: wrong type, expected a mapping (got {value_text(value)}); {hint}"
     problem = _PROBLEMS.get(kind, "wrong type" if kind.endswith("_type") else "invalid value")
     msg = error["msg"]
-    return f"{path}: {problem} (got {_one_line(repr(value))}); {msg[:1].lower()}{_one_line(msg[1:], 200)}"
+    return f"{path}: {problem} (got {value_text(value)}); {msg[:1].lower()}{_one_line(msg[1:], 200)}"
 
 
 def _valid_keys(model: type[BaseModel], loc: Sequence[str | int]) -> str:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from convexguid.families.base import Family, lazy
 from convexguid.families.flat_attitude.figures import FlatAttitudeFigures
-from convexguid.families.flat_attitude.spec import FlatAttitudeProblem
+from convexguid.families.flat_attitude.spec import FlatAttitudeProblem, estimate_size
 
 FAMILY = Family(
     name="flat_attitude",
@@ -20,4 +20,5 @@ FAMILY = Family(
     verification_method="SciPy DOP853 re-propagation of the plan",
     figures=FlatAttitudeFigures,
     bench=lazy("convexguid.families.flat_attitude.bench:bench_command"),
+    estimate_size=estimate_size,
 )

@@ -28,6 +28,7 @@ import numpy as np
 from convexguid.bench_common import FLAT_DEFAULT_NODES, cell, environment_lines, markdown_grid, one_line
 from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
 from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt
+from convexguid.outputs import write_text_atomic
 from convexguid.reference import casadi_available
 from convexguid.scp.engine import SCPResult, solve_scp
 from convexguid.scp.problem import SCPSettings
@@ -242,7 +243,7 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
     Returns
     -------
     int
-        Exit code: 0.
+        Exit code: 0 if every row converged (IPOPT: succeeded), else 1.
     """
     if nodes_list is None:
         nodes_list = FLAT_DEFAULT_NODES
@@ -264,10 +265,9 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
     if output_path is not None:
         command = _command(problem_path, nodes_list, repeat, backends, output_path)
         path = Path(output_path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(_markdown(rows, command, problem_path, ipopt_note), encoding="utf-8")
+        write_text_atomic(path, _markdown(rows, command, problem_path, ipopt_note))
         print(f"table written to {path}")
-    return 0
+    return 0 if all(r.ok for r in rows) else 1
 
 
 def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:

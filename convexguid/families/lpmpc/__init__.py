@@ -30,7 +30,9 @@ FAMILY = Family(
     figures=LpmpcFigures,
     simulated=True,
     report_section=lazy("convexguid.families.lpmpc.report:report_section"),
+    timing_section=lazy("convexguid.families.lpmpc.report:timing_section"),
     bench=lazy("convexguid.families.lpmpc.bench:bench_command"),
+    estimate_size=lazy("convexguid.families.lpmpc.solve:estimate_size"),
     key_figures=(
         ("nominal_energy_N2m2s", "nominal plan: energy integral of squared torque, N^2 m^2 s"),
         ("lpmpc_energy_N2m2s", "LPMPC closed loop: energy, N^2 m^2 s"),
@@ -39,6 +41,5 @@ FAMILY = Family(
         ("corrections", "LPMPC corrections fired"),
         ("update_checks", "LPMPC update checks"),
         ("closed_form_leaves_box", "closed-form corrections that would leave the torque box"),
-        ("correction_time_median_ms", "median correction time (prediction + KKT), ms"),
     ),
 )

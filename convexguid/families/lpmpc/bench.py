@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from convexguid.api import check_resolved
 from convexguid.bench_common import environment_lines, markdown_grid
 from convexguid.control.lpmpc import box_constrained_correction, terminal_map
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices
@@ -77,6 +78,7 @@ def _pair_row(label: str, sc, seeds, euler_std: float, rate_std: float) -> list[
 
 def run_lpmpc_bench(problem_path: str | PathLike[str], repeat: int, runs: int, output: Path | None) -> int:
     spec = load_problem(problem_path)
+    check_resolved(spec, overridable=False)  # the nominal's final time must not wait for another case's result
     scenario, nominal = build_scenario(spec)
     if scenario is None:
         raise SpecError(f"{problem_path}: the nominal plan is {nominal.status}: {nominal.message}")

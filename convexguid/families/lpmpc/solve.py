@@ -10,14 +10,16 @@ plus LPMPC's terminal errors against the file's ``checks``.
 
 from __future__ import annotations
 
+import multiprocessing
 import os
+import signal
 import time
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
 from convexguid.control.lpmpc_tracker import LpmpcSettings
 from convexguid.dynamics.mrp_attitude import shortest_mrp
+from convexguid.errors import SpecError
 from convexguid.families.lpmpc.figures import ControllerRun, LpmpcFigures, MonteCarloFigures, Spread
 from convexguid.families.lpmpc.scenario import (
     Scenario,
@@ -29,9 +31,11 @@ from convexguid.families.lpmpc.scenario import (
     resolve_nominal_path,
 )
 from convexguid.families.lpmpc.timing import update_times_ms
+from convexguid.progress import report
 from convexguid.rotations import mrp_to_quat, quat_angle_between, quat_to_euler321, quat_to_mrp
 from convexguid.scp.problem import ProgramSize
 from convexguid.sim.tracking import DisturbanceTorque, Sensors
+from convexguid.sizes import PROCESS_BYTES, SizeEstimate
 from convexguid.solution import Solution, Trajectory, make_solution
 from convexguid.verify import ConstraintCheck, Verification
 
@@ -39,18 +43,58 @@ ENVELOPE_STRIDE = 10
 """Monte Carlo histories are kept every this many steps (for the envelope plots)."""
 
 
+NOMINAL_FAMILIES = ("quaternion_attitude",)
+"""Families whose plan LPMPC can fly: a dense trajectory with the quaternion, the body rates and the torque."""
+
+
 def load_nominal_spec(spec):
-    """The nominal's problem, with ``set`` applied and the final time from ``nominal.tf_s`` if given."""
+    """The nominal's problem, with ``set`` applied and the final time from ``nominal.tf_s`` if given.
+
+    Raises
+    ------
+    SpecError
+        If the file is not a problem of :data:`NOMINAL_FAMILIES` (or is invalid).
+    """
     from convexguid.spec import load_problem
 
     path = resolve_nominal_path(spec)
     nominal_spec = load_problem(path, spec.nominal.set)
+    if nominal_spec.family not in NOMINAL_FAMILIES:
+        raise SpecError(f"{spec.source}: nominal.problem: {path} is a {nominal_spec.family} problem (got "
+                        f"{spec.nominal.problem!r}); give a problem file of the family "
+                        f"{' or '.join(NOMINAL_FAMILIES)}, whose plan LPMPC can fly")
     if spec.nominal.tf_s is None:
         return nominal_spec
     timed = [f"boundary.tf_s={spec.nominal.tf_s!r}"]
     if getattr(nominal_spec.boundary, "tf_from", None) is not None:
         timed.append("boundary.tf_from=null")
     return load_problem(path, [*spec.nominal.set, *timed])
+
+
+BYTES_PER_LAW_STEP = 250
+"""Memory kept per step of one law's single-case flight (measured about 220 B at 800 and 8000 steps)."""
+
+BYTES_PER_RUN = 4_000
+"""Memory of one Monte Carlo run's figures, besides its histories (the per-run dictionaries)."""
+
+
+def estimate_size(spec) -> SizeEstimate:
+    """Peak memory: the single case's flights (every law) and dense table, and the Monte Carlo's runs.
+
+    The step count needs the nominal's final time (``nominal.tf_s`` or the nominal file's ``boundary.tf_s``); a
+    minimum-time nominal's is known only after its solve, and then the estimate counts the runs alone.
+    """
+    nominal = load_nominal_spec(spec)
+    tf = getattr(nominal.boundary, "tf_s", None)
+    steps = 0 if tf is None else round(tf / spec.simulation.dt_s) + 1
+    laws = 1 + 2 * len(spec.lqr.r)
+    single = steps * laws * BYTES_PER_LAW_STEP
+    runs = spec.monte_carlo.runs if spec.monte_carlo is not None else 0
+    # per run: its figures and the two laws' angle and rate histories (3 + 3 numbers) every ENVELOPE_STRIDE steps
+    monte_carlo = runs * (BYTES_PER_RUN + 2 * 6 * 8 * steps / ENVELOPE_STRIDE)
+    key, value = ("simulation.dt_s", spec.simulation.dt_s) if single >= monte_carlo else ("monte_carlo.runs", runs)
+    return SizeEstimate(PROCESS_BYTES + single + monte_carlo, key, value,
+                        f"{steps} steps x {laws} laws, {runs} Monte Carlo runs")
 
 
 def forbidden_angles_deg(scenario: Scenario, x: np.ndarray) -> dict[str, tuple[float, float]]:
@@ -189,10 +233,12 @@ def _monte_carlo(spec, scenario: Scenario) -> tuple[MonteCarloFigures, dict[str,
     started = time.perf_counter()
     args = [(scenario, seed, euler_std, rate_std, ENVELOPE_STRIDE) for seed in seeds]
     if workers == 1:
-        results = [fly_monte_carlo_run(*a) for a in args]
+        results = []
+        for i, a in enumerate(args):
+            report("Monte Carlo run", i, len(args))
+            results.append(fly_monte_carlo_run(*a))
     else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            results = list(pool.map(_run_star, args, chunksize=max(1, mc.runs // (4 * workers))))
+        results = _fly_on_pool(args, workers)
     wall = time.perf_counter() - started
     t = scenario.nominal.t[::ENVELOPE_STRIDE]
     envelopes = {}
@@ -204,6 +250,26 @@ def _monte_carlo(spec, scenario: Scenario) -> tuple[MonteCarloFigures, dict[str,
                 envelopes[column + "_min"] = np.interp(scenario.nominal.t, t, stack[:, :, i].min(axis=0))
                 envelopes[column + "_max"] = np.interp(scenario.nominal.t, t, stack[:, :, i].max(axis=0))
     return _monte_carlo_figures(results, workers, wall), envelopes
+
+
+def _fly_on_pool(args: list[tuple], workers: int) -> list[dict]:
+    """The Monte Carlo runs on a pool of ``workers`` processes, in order, reporting each finished run.
+
+    The workers ignore Ctrl-C (it reaches the whole process group): this process decides. On an interrupt (or any
+    error) leaving the ``with`` block terminates the pool: no queued run starts and the runs in flight are dropped,
+    so the command exits at once instead of after them (a ``ProcessPoolExecutor`` shut down with ``cancel_futures``
+    still finishes the runs in flight: 3 s measured).
+    """
+    with multiprocessing.Pool(workers, initializer=signal.signal, initargs=(signal.SIGINT, signal.SIG_IGN)) as pool:
+        arriving = pool.imap(_run_star, args)
+        results: list[dict] = []
+        while len(results) < len(args):
+            report("Monte Carlo run", len(results), len(args))
+            try:
+                results.append(arriving.next(timeout=0.2))
+            except multiprocessing.TimeoutError:
+                pass
+    return results
 
 
 def _run_star(args: tuple) -> dict:

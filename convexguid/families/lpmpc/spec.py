@@ -4,8 +4,8 @@ The nominal is another problem file (any planned attitude family whose dense tra
 quaternion, the body rates and the torque: ``quaternion_attitude``), solved and dense-verified first; its
 spacecraft, torque box, final time and target come from it. Noise and disturbance readings: every
 ``*_std_*`` key is a standard deviation; the Monte Carlo initial errors are given as variances
-(``*_var_*``, deg^2 and (deg/s)^2), the reading of the paper's ``N(0, 10)`` and ``N(0, 5)`` that
-design.md fixes.
+(``*_var_*``, deg^2 and (deg/s)^2), this project's reading of the paper's ``N(0, 10)`` and ``N(0, 5)``
+(docs/parameters.md).
 
 References
 ----------

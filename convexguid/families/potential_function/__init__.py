@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from convexguid.families.base import Family, lazy
 from convexguid.families.potential_function.figures import PotentialFunctionFigures
-from convexguid.families.potential_function.spec import PotentialFunctionProblem
+from convexguid.families.potential_function.spec import PotentialFunctionProblem, estimate_size
 
 
 def _solve(spec, log=None):
@@ -27,6 +27,7 @@ FAMILY = Family(
     verification_method="closed-loop simulation",
     figures=PotentialFunctionFigures,
     simulated=True,
+    estimate_size=estimate_size,
     key_figures=(
         ("maneuver_time_1deg_s", "time to within 1 deg of the command, s"),
         ("maneuver_time_01deg_s", "time to within 0.1 deg of the command, s"),

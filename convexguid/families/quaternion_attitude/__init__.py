@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from convexguid.families.base import Family, lazy
 from convexguid.families.quaternion_attitude.figures import QuaternionAttitudeFigures
-from convexguid.families.quaternion_attitude.spec import QuaternionAttitudeProblem
+from convexguid.families.quaternion_attitude.spec import QuaternionAttitudeProblem, estimate_size
 
 FAMILY = Family(
     name="quaternion_attitude",
@@ -22,4 +22,5 @@ FAMILY = Family(
     verification_method="SciPy DOP853 re-propagation of the plan",
     figures=QuaternionAttitudeFigures,
     bench=lazy("convexguid.families.quaternion_attitude.bench:bench_command"),
+    estimate_size=estimate_size,
 )

@@ -34,6 +34,7 @@ import numpy as np  # noqa: E402
 from numpy.typing import ArrayLike, NDArray  # noqa: E402
 
 from convexguid.geometry import eigenaxis_path  # noqa: E402
+from convexguid.report.plots import write_figure  # noqa: E402
 from convexguid.rotations import quat_conjugate, quat_rotate  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 from convexguid.verify import TORQUE_AXIS_CHECKS  # noqa: E402
@@ -201,9 +202,7 @@ def _finish(fig, ax, title: str, path: Path) -> Path:
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, loc="best", framealpha=0.85)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return write_figure(fig, path)
 
 
 def _plot_sky(solution: Solution, cones: Sequence[SkyCone], tracks: Sequence[SkyTrack], path: Path) -> Path:

@@ -271,20 +271,21 @@ class QuaternionProgram:
         A[np.arange(NX), self._cols(0, slice(0, NX))] = 1.0
         A[NX + np.arange(NX), self._cols(self.K, slice(0, NX))] = 1.0
         b = np.concatenate([c.q0, c.w0, c.qf, c.wf])
-        rows, h = [], []
+        # the rate and torque boxes, +-1 per row: built sparse (a dense matrix grows as the square of the nodes)
+        cols, signs, h = [], [], []
         for k in range(self.num_nodes):
             for part, bound in ((slice(4, 7), np.full(3, c.rate_max)), (slice(7, 10), c.torque_max)):
                 for sign in (1.0, -1.0):
-                    g = np.zeros((3, n))
-                    g[np.arange(3), self._cols(k, part)] = sign
-                    rows.append(g)
+                    cols.append(self._cols(k, part))
+                    signs.append(np.full(3, sign))
                     h.append(bound)
         if self.free_time:
-            g = np.zeros((1, n))
-            g[0, -1] = -1.0
-            rows.append(g)
+            cols.append([n - 1])
+            signs.append([-1.0])
             h.append([-1e-3 * self._tf_guess])
-        return LinearConstraints(A, b, sp.coo_matrix(np.vstack(rows)), np.concatenate(h))
+        cols, signs = np.concatenate(cols), np.concatenate(signs)
+        G = sp.coo_matrix((signs, (np.arange(cols.size), cols)), shape=(cols.size, n))
+        return LinearConstraints(A, b, G, np.concatenate(h))
 
     def linear_constraints(self) -> LinearConstraints:
         return self._linear

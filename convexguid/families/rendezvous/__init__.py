@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from convexguid.families.base import Family, lazy
 from convexguid.families.rendezvous.figures import RendezvousFigures
-from convexguid.families.rendezvous.spec import RendezvousProblem
+from convexguid.families.rendezvous.spec import RendezvousProblem, estimate_size
 
 FAMILY = Family(
     name="rendezvous",
@@ -29,4 +29,5 @@ FAMILY = Family(
         ("planned_direction_norm_min", "smallest norm of the interpolated direction on burns (1 at nodes)"),
     ),
     bench=lazy("convexguid.families.rendezvous.bench:bench_command"),
+    estimate_size=estimate_size,
 )

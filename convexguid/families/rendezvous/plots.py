@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from convexguid.families.rendezvous.case import AXES  # noqa: E402
+from convexguid.report.plots import write_figure  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
 
@@ -62,7 +63,5 @@ def plot_rendezvous(solution: Solution, out_dir: Path, save) -> list[Path]:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out_dir / "trajectory_xy.png")
-    plt.close(fig)
-    paths.append(out_dir / "trajectory_xy.png")
+    paths.append(write_figure(fig, out_dir / "trajectory_xy.png"))
     return paths
