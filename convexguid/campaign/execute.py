@@ -1,0 +1,206 @@
+"""Running a campaign's runs: the task a worker executes, and the executors (in process, or on Dask).
+
+A worker receives a :class:`RunTask`: the problem file's data (a dict, already read by the caller), the file's
+absolute path (for messages, and for files the problem names relative to itself), the run's overrides and the
+figures to collect. It never reads the campaign file and never depends on its working directory. It returns a
+small dictionary (status, message, objective, verified, wall time, figures), not the solution with its
+trajectories, so what travels back to the client stays a few hundred bytes per run.
+
+Whatever a run raises becomes an outcome with status ``error`` and a one-line reason; a worker that dies under
+a run (Dask gives up on it after its retries) does too. The executors hand each outcome to a callback as it
+arrives, in completion order.
+
+dask and distributed are imported here, when a campaign runs on them, never by ``import convexguid``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import signal
+import time
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from convexguid.bench_common import one_line
+from convexguid.errors import SpecError
+from convexguid.spec.loader import apply_overrides, parse_problem
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+    from convexguid.campaign.plan import Run
+    from convexguid.campaign.spec import Campaign
+
+REASON_LENGTH = 300
+"""Longest reason (characters) an error outcome keeps."""
+
+TRIM_THRESHOLD_KEY = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
+"""Dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536`` to hand freed memory back to the system; a fixed
+threshold also switches off glibc's adaptive mmap threshold, so every mid-sized numpy array is mapped and unmapped
+afresh, which made the flat-attitude solve 1.6x slower (validation/BENCHMARKS_campaign.md). A solve keeps little
+memory between runs, so the local cluster leaves the variable unset."""
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """What a worker needs for one run (see the module docstring)."""
+
+    run_id: int
+    problem: dict[str, Any]
+    source: str
+    overrides: tuple[str, ...]
+    figures: tuple[str, ...]
+
+
+def make_tasks(campaign: Campaign, runs: Sequence[Run]) -> list[RunTask]:
+    """The tasks of ``runs``."""
+    figures = tuple(campaign.spec.figures)
+    return [RunTask(run.run_id, campaign.problem_data, campaign.problem_source, run.overrides, figures)
+            for run in runs]
+
+
+def run_task(task: RunTask) -> dict[str, Any]:
+    """Solve (or simulate) one run and summarise it; never raises (an exception is an ``error`` outcome)."""
+    from convexguid.api import solve
+
+    started = time.perf_counter()
+    try:
+        spec = parse_problem(apply_overrides(task.problem, task.overrides, task.source), task.source)
+        solution = solve(spec)
+        summary = solution.summary()
+        outcome = {"status": solution.status, "message": one_line(solution.message, REASON_LENGTH),
+                   "objective": summary["objective"],
+                   "verified": solution.verification.passed if solution.verification is not None else None,
+                   "figures": figure_values(summary, task.figures)}
+    except Exception as exc:  # noqa: BLE001 - every failure of a run is recorded as its row, never the campaign's end
+        outcome = error_outcome(task, exc)
+    outcome["run_id"] = task.run_id
+    outcome["wall_time_s"] = time.perf_counter() - started
+    return outcome
+
+
+def error_outcome(task: RunTask, exc: BaseException, wall_time_s: float | None = None) -> dict[str, Any]:
+    """The outcome of a run that raised ``exc`` (or whose worker died)."""
+    return {"run_id": task.run_id, "status": "error",
+            "message": one_line(f"{type(exc).__name__}: {exc}", REASON_LENGTH), "objective": None,
+            "verified": None, "figures": dict.fromkeys(task.figures), "wall_time_s": wall_time_s}
+
+
+def figure_values(summary: dict[str, Any], figures: Sequence[str]) -> dict[str, float | None]:
+    """Each figure (a dotted path into ``summary``; list items by index) as a float; None where the summary
+    does not have it or it is null.
+
+    Raises
+    ------
+    SpecError
+        If a figure is text, a list or a mapping rather than a number.
+    """
+    values: dict[str, float | None] = {}
+    for figure in figures:
+        node: Any = summary
+        for part in figure.split("."):
+            if isinstance(node, dict):
+                node = node.get(part)
+            elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
+                node = node[int(part)]
+            else:
+                node = None
+        if node is not None and not isinstance(node, (bool, int, float)):
+            raise _not_a_number(figure, node)
+        values[figure] = float(node) if node is not None and math.isfinite(float(node)) else None
+    return values
+
+
+def _not_a_number(figure: str, value: Any) -> SpecError:
+    """The error for a figure whose value is text, a list or a mapping; it names an item to ask for instead."""
+    if isinstance(value, list):
+        kind, hint = "a list", f"name a number inside it, e.g. {figure}.0"
+    elif isinstance(value, dict):
+        kind, hint = "a mapping", f"name a number inside it, e.g. {figure}.{next(iter(value), 'key')}"
+    else:
+        kind, hint = type(value).__name__, "name a numeric figure"
+    return SpecError(f"figures: {figure} is {kind}, not a number (got {one_line(repr(value))}); {hint}")
+
+
+OutcomeSink = Callable[[RunTask, dict[str, Any]], None]
+"""Receives each task with its outcome, as it arrives."""
+
+
+def run_serial(tasks: Sequence[RunTask], sink: OutcomeSink) -> None:
+    """Run the tasks one after another in this process."""
+    for task in tasks:
+        sink(task, run_task(task))
+
+
+def run_on_dask(tasks: Sequence[RunTask], sink: OutcomeSink, client: Client) -> None:
+    """Submit every task to the cluster of ``client``; hand over each outcome as it completes.
+
+    Whatever ends this early (an interrupt, an exception of ``sink``) cancels the tasks still pending.
+    """
+    from distributed import as_completed
+
+    session = uuid.uuid4().hex[:8]
+    futures = {client.submit(run_task, task, key=f"convexguid-run-{task.run_id}-{session}", pure=False): task
+               for task in tasks}
+    try:
+        for future in as_completed(futures, loop=client.loop):
+            task = futures[future]
+            try:
+                outcome = future.result()
+            except Exception as exc:  # noqa: BLE001 - the task did not run to its end (a worker died under it)
+                outcome = error_outcome(task, exc)
+            future.release()
+            sink(task, outcome)
+    finally:
+        client.cancel(list(futures))
+
+
+@contextlib.contextmanager
+def dask_client(scheduler: str | None, workers: int | None, connect_timeout_s: float, source: str
+                ) -> Iterator[Client]:
+    """A client of the scheduler at ``scheduler``, or of a new local cluster of ``workers`` single-threaded worker
+    processes (every core if None) closed at the end.
+
+    Raises
+    ------
+    SpecError
+        If no scheduler answers at ``scheduler`` within ``connect_timeout_s`` (nothing has run).
+    """
+    import dask
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=connect_timeout_s, set_as_default=False)
+        except Exception as exc:  # noqa: BLE001 - any failure to connect is the address's fault
+            raise SpecError(f"{source}: --scheduler: no Dask scheduler answers at {scheduler!r} within "
+                            f"{connect_timeout_s:g} s ({one_line(str(exc), 120)}); give the address the scheduler "
+                            "prints, e.g. tcp://host:8786") from None
+        with client:
+            yield client
+        return
+    with _workers_ignore_interrupts(), dask.config.set({TRIM_THRESHOLD_KEY: None}):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=logging.ERROR)
+    with cluster, Client(cluster, set_as_default=False) as client:
+        yield client
+
+
+@contextlib.contextmanager
+def _workers_ignore_interrupts() -> Iterator[None]:
+    """Ignore SIGINT while the local workers start, so the processes they spawn inherit that: Ctrl-C then reaches
+    the client alone, which cancels the runs and closes the cluster in order (without it every worker prints a
+    traceback)."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
