@@ -88,7 +88,7 @@ def report(stage: str, done: int | None = None, total: int | None = None) -> Non
     job.stage, job.done, job.total = stage, done, total
 
 
-def _display_mode(stream: TextIO) -> str | None:
+def display_mode(stream: TextIO) -> str | None:
     """``"live"`` (a line redrawn in place), ``"lines"`` (a heartbeat line now and then) or None (nothing)."""
     wanted = os.environ.get(ENVIRONMENT, "").strip()
     terminal = stream.isatty()
@@ -165,7 +165,7 @@ def run(work: Callable[[], _T], label: str, stream: TextIO | None = None) -> _T:
         finally:
             finished.set()
 
-    mode = _display_mode(stream)
+    mode = display_mode(stream)
     line = _StatusLine(job, stream, mode) if mode is not None else None
     real_stdout = sys.stdout
     if line is not None and mode == "live":

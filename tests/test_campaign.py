@@ -181,11 +181,14 @@ def test_figure_values_follow_dotted_paths_through_mappings_and_lists():
         figure_values(summary, ["runs"])
 
 
-def test_progress_line_counts_failures_and_estimates_the_time_left():
+def test_progress_line_counts_failures_and_estimates_the_time_left(monkeypatch):
     import io
 
+    monkeypatch.delenv("CONVEXGUID_PROGRESS", raising=False)
+
     stream = io.StringIO()
-    line = ProgressLine("demo", stream, interval_s=0.0)
+    assert ProgressLine("quiet", stream).__call__(Progress(10, 4, 1, 2, 6.0)) is None and not stream.getvalue()
+    line = ProgressLine("demo", stream, interval_s=0.0, mode="lines")  # as with CONVEXGUID_PROGRESS=1 off a terminal
     line(Progress(total=10, done=4, failures=1, resumed=2, elapsed_s=6.0))
     line(Progress(total=10, done=10, failures=1, resumed=2, elapsed_s=24.0))
     first, last = stream.getvalue().splitlines()

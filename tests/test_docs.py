@@ -55,7 +55,7 @@ def test_no_reference_to_a_document_outside_the_repository():
     assert not named
 
 
-@pytest.mark.parametrize("command", ["solve", "simulate", "validate", "bench"])
+@pytest.mark.parametrize("command", ["solve", "simulate", "validate", "bench", "campaign"])
 def test_the_contract_names_every_option(command, capsys):
     with pytest.raises(SystemExit):
         main([command, "--help"])

@@ -7,6 +7,8 @@ import time
 from dataclasses import dataclass
 from typing import TextIO
 
+from convexguid.progress import HEARTBEAT_S, display_mode
+
 
 @dataclass(frozen=True)
 class Progress:
@@ -41,17 +43,25 @@ def duration_text(seconds: float | None) -> str:
 
 class ProgressLine:
     """Prints :class:`Progress` as one line: rewritten in place on a terminal, else at most every ``interval_s``
-    seconds (and at the last run)."""
+    seconds (and at the last run).
 
-    def __init__(self, name: str, stream: TextIO | None = None, interval_s: float = 10.0):
+    Where it shows is decided as for every long run (:func:`convexguid.progress.display_mode`): on a terminal, or
+    off one when ``CONVEXGUID_PROGRESS=1``; ``mode`` (``"live"``, ``"lines"`` or None for nothing) overrides that.
+    """
+
+    def __init__(self, name: str, stream: TextIO | None = None, interval_s: float = HEARTBEAT_S,
+                 mode: str | None = "auto"):
         self.name = name
         self.stream = stream if stream is not None else sys.stderr
         self.interval_s = interval_s
         self._last = -float("inf")
-        self._tty = self.stream.isatty()
+        self._mode = display_mode(self.stream) if mode == "auto" else mode
+        self._tty = self._mode == "live"
         self._open = False
 
     def __call__(self, p: Progress) -> None:
+        if self._mode is None:
+            return
         now = time.monotonic()
         last = p.done == p.total
         if not self._tty and not last and now - self._last < self.interval_s:
