@@ -11,6 +11,7 @@ from convexguid.checks import optional_callable, override_list
 from convexguid.errors import SpecError, value_text
 from convexguid.families import FAMILIES, Family, get_family
 from convexguid.spec import ProblemSpec, load_problem
+from convexguid.spec.loader import with_overrides
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import IterationRecord
@@ -21,7 +22,7 @@ def _spec(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | No
     """``problem`` loaded (a YAML path) or reloaded with ``overrides`` (a spec), the arguments checked first."""
     overrides = override_list(overrides)
     if isinstance(problem, ProblemSpec):
-        return load_problem(problem.source, overrides) if overrides else problem
+        return with_overrides(problem, overrides) if overrides else problem
     if not isinstance(problem, (str, PathLike)):
         raise SpecError(f"problem: expected the path of a problem YAML file or a loaded spec (got "
                         f"{value_text(problem)}); e.g. convexguid.solve('problems/cai2018_flat_attitude.yaml')")

@@ -228,3 +228,25 @@ def test_override_does_not_mutate_input() -> None:
 def test_bad_matrix_entry_names_row_and_column(tmp_path: Path) -> None:
     message = error_of(bad_file(tmp_path, "spacecraft.inertia_kgm2", [[1, 0, 0], [0, "a", 0], [0, 0, 1]]))
     assert "spacecraft.inertia_kgm2.1.1: not a number (got 'a')" in message
+
+
+def test_overrides_on_a_spec_built_in_python_apply_to_its_own_data(tmp_path):
+    """A spec made from a dict (no file behind it) takes overrides from the data it was made from; a spec read
+    from a file does not read the file again (it may have changed or moved since)."""
+    import convexguid
+    from convexguid.spec.loader import parse_problem, with_overrides
+
+    data = yaml.safe_load(Path("problems/cai2018_flat_attitude.yaml").read_text())
+    built = parse_problem(data)
+    changed = with_overrides(built, ["discretization.nodes=12"])
+    assert (changed.source, changed.discretization.nodes, built.discretization.nodes) == ("<dict>", 12, 32)
+    sol = convexguid.solve(built, ["discretization.nodes=16"])
+    assert sol.size.num_variables == 3 * 17  # solved at the overridden size
+
+    moved = tmp_path / "problem.yaml"
+    moved.write_text(Path("problems/cai2018_flat_attitude.yaml").read_text())
+    loaded = convexguid.load_problem(moved)
+    moved.unlink()
+    assert with_overrides(loaded, ["discretization.nodes=10"]).discretization.nodes == 10
+    with pytest.raises(SpecError, match="discretization.nodez"):
+        with_overrides(built, ["discretization.nodez=10"])

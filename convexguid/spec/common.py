@@ -508,6 +508,7 @@ class ProblemBase(SpecModel):
     description: str | None = None
     notes: str | None = None
     _source: str = PrivateAttr(default="<dict>")
+    _data: dict[str, Any] = PrivateAttr(default_factory=dict)
 
     @property
     def source(self) -> str:

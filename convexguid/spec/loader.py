@@ -279,7 +279,20 @@ def parse_problem(data: Mapping[str, Any], source: str = "<dict>") -> ProblemSpe
     except ValidationError as exc:
         raise SpecError(f"{source}: {describe_validation_error(exc, model)}") from None
     spec._source = source
+    spec._data = copy.deepcopy(dict(data))
     return spec
+
+
+def with_overrides(spec: ProblemSpec, overrides: Sequence[str]) -> ProblemSpec:
+    """``spec`` validated again with ``overrides`` applied to the data it was made from (a file's or a dict's:
+    the file is not read again).
+
+    Raises
+    ------
+    SpecError
+        If an override does not apply or the result is invalid.
+    """
+    return parse_problem(apply_overrides(spec._data, overrides, spec.source), spec.source)
 
 
 def describe_validation_error(exc: ValidationError, model: type[BaseModel]) -> str:
