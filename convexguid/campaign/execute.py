@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from convexguid.bench_common import one_line
 from convexguid.errors import SpecError
-from convexguid.spec.loader import apply_overrides, parse_problem
+from convexguid.spec.loader import MISSING, apply_overrides, parse_problem, value_at
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -101,14 +101,8 @@ def figure_values(summary: dict[str, Any], figures: Sequence[str]) -> dict[str, 
     """
     values: dict[str, float | None] = {}
     for figure in figures:
-        node: Any = summary
-        for part in figure.split("."):
-            if isinstance(node, dict):
-                node = node.get(part)
-            elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
-                node = node[int(part)]
-            else:
-                node = None
+        node = value_at(summary, figure)
+        node = None if node is MISSING else node
         if node is not None and not isinstance(node, (bool, int, float)):
             raise _not_a_number(figure, node)
         values[figure] = float(node) if node is not None and math.isfinite(float(node)) else None

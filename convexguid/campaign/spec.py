@@ -37,7 +37,14 @@ from convexguid.campaign.plan import override
 from convexguid.errors import SpecError
 from convexguid.families import Family, get_family
 from convexguid.spec.common import NonEmptyStr, PositiveFloat, SpecModel, spec_error
-from convexguid.spec.loader import apply_overrides, describe_validation_error, parse_problem, read_yaml_mapping
+from convexguid.spec.loader import (
+    MISSING,
+    apply_overrides,
+    describe_validation_error,
+    parse_problem,
+    read_yaml_mapping,
+    value_at,
+)
 
 DottedKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_]+(\.[A-Za-z0-9_]+)*$")]
 """A key path as for ``--set``: names and list indices joined by dots."""
@@ -269,15 +276,10 @@ def _check_figures(spec: CampaignSpec, family: Family, source: str) -> None:
 
 def _numeric_value(data: dict[str, Any], key: str, where: str, source: str, problem_source: str) -> float:
     """The number at ``key`` in the problem data; a :class:`SpecError` if there is none."""
-    node: Any = data
-    for part in key.split("."):
-        if isinstance(node, dict) and part in node:
-            node = node[part]
-        elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
-            node = node[int(part)]
-        else:
-            raise SpecError(f"{source}: {where}: no such key in {problem_source} (got {key!r}); a dispersion "
-                            "varies a number the problem file gives (list items by index, e.g. euler_deg.0)")
+    node = value_at(data, key)
+    if node is MISSING:
+        raise SpecError(f"{source}: {where}: no such key in {problem_source} (got {key!r}); a dispersion "
+                        "varies a number the problem file gives (list items by index, e.g. euler_deg.0)")
     if isinstance(node, bool) or not isinstance(node, (int, float)):
         example = f"; e.g. {key}.0" if isinstance(node, list) else ""
         raise SpecError(f"{source}: {where}: {key} is not a number in {problem_source} (got {node!r}); "

@@ -241,6 +241,24 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
     return result
 
 
+MISSING = object()
+"""What :func:`value_at` returns where a key path leads nowhere."""
+
+
+def value_at(data: Any, key: str) -> Any:
+    """The value at dotted ``key`` in nested mappings and lists (list items by index, as in ``--set``), or
+    :data:`MISSING` where the path leads nowhere."""
+    node = data
+    for part in key.split("."):
+        if isinstance(node, Mapping) and part in node:
+            node = node[part]
+        elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            node = node[int(part)]
+        else:
+            return MISSING
+    return node
+
+
 def parse_problem(data: Mapping[str, Any], source: str = "<dict>") -> ProblemSpec:
     """Validate raw problem data with the model of its ``family``.
 

@@ -28,6 +28,8 @@ from functools import lru_cache
 import numpy as np
 from numpy.polynomial import legendre
 
+from convexguid.transcription.mapped_chebyshev import barycentric_differentiation, barycentric_interpolation_matrix
+
 
 def _readonly(a: np.ndarray) -> np.ndarray:
     a.setflags(write=False)
@@ -74,27 +76,13 @@ def lgr_differentiation(n: int) -> np.ndarray:
     """:math:`D \\in R^{n \\times (n+1)}`: derivative at the LGR points of the degree-:math:`n` interpolant
     through its values at the support points (eq. 28)."""
     s = radau_support(n)
-    v = _barycentric_weights(s)
-    diff = s[:, None] - s[None, :]
-    np.fill_diagonal(diff, 1.0)
-    full = (v[None, :] / v[:, None]) / diff
-    np.fill_diagonal(full, 0.0)
-    np.fill_diagonal(full, -full.sum(axis=1))
-    return _readonly(full[:n].copy())
+    first, _ = barycentric_differentiation(s, _barycentric_weights(s))
+    return _readonly(first[:n].copy())
 
 
 def lagrange_rows(points: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """Rows: the Lagrange basis on ``points`` evaluated at ``tau`` (barycentric form, exact at the points)."""
-    v = _barycentric_weights(points)
-    tau = np.atleast_1d(np.asarray(tau, dtype=float))
-    diff = tau[:, None] - points[None, :]
-    exact = np.isclose(diff, 0.0, atol=1e-14)
-    diff[exact] = 1.0
-    terms = v[None, :] / diff
-    rows = terms / terms.sum(axis=1, keepdims=True)
-    hit = exact.any(axis=1)
-    rows[hit] = exact[hit].astype(float)
-    return rows
+    return barycentric_interpolation_matrix(points, _barycentric_weights(points), tau, atol=1e-14)
 
 
 @dataclass(frozen=True)

@@ -119,7 +119,8 @@ def barycentric_differentiation(x: np.ndarray, w: np.ndarray) -> tuple[np.ndarra
     return d1, d2
 
 
-def barycentric_interpolation_matrix(x: np.ndarray, w: np.ndarray, points: np.ndarray) -> np.ndarray:
+def barycentric_interpolation_matrix(x: np.ndarray, w: np.ndarray, points: np.ndarray,
+                                     atol: float = 0.0) -> np.ndarray:
     """Matrix ``L`` with ``L @ f(x) = f_interp(points)`` for the barycentric formula of eq. (21).
 
     .. math::
@@ -127,11 +128,11 @@ def barycentric_interpolation_matrix(x: np.ndarray, w: np.ndarray, points: np.nd
         \\bar f(\\lambda) = \\sum_k \\frac{w_k f_k}{\\lambda - \\lambda_k}
                          \\Big/ \\sum_k \\frac{w_k}{\\lambda - \\lambda_k}
 
-    A point that coincides with a node gets that node's value exactly.
+    A point that coincides with a node (within ``atol``) gets that node's value exactly.
     """
     points = np.atleast_1d(np.asarray(points, dtype=float))
     diff = points[:, None] - x[None, :]
-    exact = diff == 0.0
+    exact = np.abs(diff) <= atol
     diff[exact] = 1.0
     terms = w[None, :] / diff
     mat = terms / terms.sum(axis=1, keepdims=True)
