@@ -33,6 +33,7 @@ from convexguid.campaign.execute import dask_client, make_tasks, run_on_dask, ru
 from convexguid.campaign.plan import plan_runs
 from convexguid.campaign.spec import load_campaign
 from convexguid.campaign.table import ResultsTable
+from convexguid.outputs import write_text_atomic
 
 DEFAULT_CAMPAIGN = Path("problems/campaigns/cai2018_dispersed_attitudes.yaml")
 NOOP_TASKS = 2000
@@ -195,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
     task_bytes = len(pickle.dumps(make_tasks(campaign, runs[:1])[0]))
     text = _markdown(args, campaign, runs, passes, noop_ms, task_bytes, mismatches, cores)
     if args.output is not None:
-        args.output.write_text(text)
+        write_text_atomic(args.output, text)
     print(text)
     return 0 if mismatches == 0 else 1
 

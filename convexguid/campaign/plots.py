@@ -23,6 +23,7 @@ from convexguid.campaign.plan import Run
 from convexguid.campaign.report import grid_points, quantities
 from convexguid.campaign.spec import Campaign
 from convexguid.campaign.table import is_ok, numeric_keys
+from convexguid.report.plots import write_figure
 
 MAX_SERIES = 8
 """Lines per sweep plot at most (further combinations of the other grid keys are left out)."""
@@ -87,7 +88,7 @@ def _sweep(campaign: Campaign, rows: Sequence[dict[str, Any]], x_key: str, name:
         ax.legend(fontsize=8)
     fig.tight_layout()
     path = directory / f"sweep_{_file_name(name)}.png"
-    fig.savefig(path, dpi=110)
+    write_figure(fig, path, dpi=110)
     return f"{name} against {x_key}", path
 
 
@@ -129,7 +130,7 @@ def _histograms(campaign: Campaign, rows: Sequence[dict[str, Any]], directory: P
     fig.suptitle(f"{campaign.spec.name}: histograms", fontsize=10)
     fig.tight_layout()
     path = directory / "histograms.png"
-    fig.savefig(path, dpi=100)
+    write_figure(fig, path, dpi=100)
     return "histograms", path
 
 
@@ -158,5 +159,5 @@ def _scatter(campaign: Campaign, rows: Sequence[dict[str, Any]], directory: Path
     fig.suptitle(f"{campaign.spec.name}: figures against the dispersed values", fontsize=10)
     fig.tight_layout()
     path = directory / "scatter.png"
-    fig.savefig(path, dpi=100)
+    write_figure(fig, path, dpi=100)
     return "figures against the dispersed values", path

@@ -15,7 +15,6 @@ directory is only ever resumed by the campaign that wrote it.
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -25,6 +24,7 @@ import pyarrow.parquet as pq
 
 from convexguid.campaign.plan import yaml_text
 from convexguid.errors import SpecError
+from convexguid.outputs import atomic_file
 
 if TYPE_CHECKING:
     from convexguid.campaign.plan import Run
@@ -152,7 +152,6 @@ class ResultsTable:
 
 
 def _write_atomic(table: pa.Table, path: Path) -> None:
-    """Write ``table`` to a temporary sibling of ``path`` and rename it over ``path``."""
-    tmp = path.with_name(path.name + ".tmp")
-    pq.write_table(table, tmp)
-    os.replace(tmp, path)
+    """Write ``table`` to ``path`` through :func:`~convexguid.outputs.atomic_file` (a part is whole or absent)."""
+    with atomic_file(path, "wb") as fh:
+        pq.write_table(table, fh)

@@ -31,14 +31,14 @@ def save_figure(fig, ax, title: str, ylabel: str, path: Path, xlabel: str = "tim
     return write_figure(fig, path)
 
 
-def write_figure(fig, path: Path) -> Path:
+def write_figure(fig, path: Path, dpi: float | None = None) -> Path:
     """Write ``fig`` to ``path`` atomically (:func:`~convexguid.outputs.atomic_file`; the format from the
-    suffix, e.g. ``.png``) and close it; return ``path``."""
+    suffix, e.g. ``.png``; ``dpi`` as for ``savefig``, the figure's own if None) and close it; return ``path``."""
     import matplotlib.pyplot as plt
 
     try:
         with atomic_file(path, "wb") as fh:
-            fig.savefig(fh, format=Path(path).suffix.lstrip(".") or "png")
+            fig.savefig(fh, format=Path(path).suffix.lstrip(".") or "png", **({"dpi": dpi} if dpi else {}))
     finally:
         plt.close(fig)
     return path
