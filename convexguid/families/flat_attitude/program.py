@@ -39,7 +39,7 @@ from scipy.interpolate import CubicHermiteSpline
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.geometry import PointingCone
 from convexguid.rotations import euler321_rates_from_body, euler321_rates_matrix, euler321_to_dcm
-from convexguid.scp.derivatives import pointwise_jacobian
+from convexguid.scp.derivatives import pointwise_jacobian, pointwise_jacobians
 from convexguid.scp.problem import (
     ConstraintBlock,
     Evaluation,
@@ -198,7 +198,7 @@ class FlatAttitudeProgram:
         def torque(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
             return flat_torque(p.inertia, a, b, c)
 
-        local = [pointwise_jacobian(torque, (z, zd, zdd), i) for i in range(3)]
+        local = pointwise_jacobians(torque, (z, zd, zdd))
         jac = np.einsum("kab,kj->kajb", local[1], s * p.grid.d1)
         jac += np.einsum("kab,kj->kajb", local[2], s * s * p.grid.d2)
         idx = np.arange(self.num_nodes)
