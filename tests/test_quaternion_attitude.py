@@ -148,7 +148,10 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
     from convexguid.report.comparisons import comparison_sections
     from convexguid.report.validation import CaseResult, link_overrides
 
-    coarse = ["discretization.intervals=16"]
+    # The files' own 50-interval grid: on a 16-interval grid the minimum-energy SCP ends in a slow tail
+    # (the path grazes the forbidden cone at a node and a midpoint; 80-140 iterations), which would make
+    # this test about iteration limits rather than the comparison.
+    coarse: list[str] = []
     controller_spec = load_problem(PROBLEMS / "guo2011_adaptive.yaml")
     controller = solve(controller_spec)
     tf = controller.figures.maneuver_time_01deg_s

@@ -77,10 +77,10 @@ class _Penalties:
         return self.col.size
 
 
-def _penalties(items: list[tuple[int, ...]]) -> _Penalties:
-    width = 7
-    arr = np.array(items, dtype=np.int64).reshape(-1, width) if items else np.zeros((0, width), dtype=np.int64)
-    return _Penalties(*(arr[:, k] for k in range(width)))
+def _penalties(items: np.ndarray | list[tuple[int, ...]]) -> _Penalties:
+    """Penalties from rows ``(col, bound_row, row, coef, bound_coef, mirror_row, mirror_coef)``."""
+    arr = np.asarray(items, dtype=np.int64).reshape(-1, 7)
+    return _Penalties(*(arr[:, k] for k in range(7)))
 
 
 class _Layout:
@@ -134,8 +134,9 @@ class _Layout:
         other &= slack[entry_col]
         pos = np.flatnonzero(other)  # column-major: a column's entries are adjacent
         one = pos[count[entry_col[pos]] == 1]
-        hinges = [(c, bound_row[c], entry_row[p], p, bound_pos[c], -1, -1) for c, p in zip(entry_col[one], one,
-                                                                                           strict=True)]
+        hinge_col = entry_col[one]
+        hinges = np.column_stack([hinge_col, bound_row[hinge_col], entry_row[one], one, bound_pos[hinge_col],
+                                  np.full(one.size, -1), np.full(one.size, -1)])
         two = pos[count[entry_col[pos]] == 2].reshape(-1, 2)
         absolutes = []
         for p1, p2 in two:
@@ -158,7 +159,7 @@ class _Layout:
         self.ineq_rows = np.flatnonzero(~used & ~singleton & (np.arange(n_rows) >= nz))
         position = np.full(n, -1)
         position[self.core] = np.arange(self.core.size)
-        self.bound_data = np.array([row_entries(r)[0] for r in self.bound_rows], dtype=np.int64)
+        self.bound_data = by_row[row_ptr[self.bound_rows]].astype(np.int64)
         self.bound_var = position[entry_col[self.bound_data]]
         # the rows DAQP sees: equalities, inequalities, hinge rows, absolute-value rows (their + side)
         self.rows = np.concatenate([self.eq_rows, self.ineq_rows, self.hinge.row, self.absolute.row]).astype(np.int64)

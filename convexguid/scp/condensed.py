@@ -53,6 +53,7 @@ class CondensedAssembler:
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray, curvature: bool = False) -> None:
         self.n, self.m = n, first.residuals.size
+        linear = linear.sparse()
         self.linear, self.outputs, self.scale = linear, outputs, scale
         self.linear_cost, self.weights, self.curvature = linear_cost, weights, curvature
         self.n_ineq = sum(b.values.size for b in first.inequalities)

@@ -18,7 +18,7 @@ A formulation implements :class:`NonconvexProgram`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -63,6 +63,21 @@ class LinearConstraints:
     @classmethod
     def none(cls, n: int) -> LinearConstraints:
         return cls(np.zeros((0, n)), np.zeros(0), np.zeros((0, n)), np.zeros(0))
+
+    def sparse(self) -> LinearConstraints:
+        """The same constraints with ``A`` and ``G`` as COO matrices of their nonzeros only.
+
+        The subproblem assemblers fix their sparsity pattern from these matrices; a dense boundary-condition
+        block would otherwise put every explicit zero into the solver's KKT system.
+        """
+        return replace(self, A=_nonzeros(self.A), G=_nonzeros(self.G))
+
+
+def _nonzeros(matrix: np.ndarray | sp.spmatrix) -> sp.coo_matrix:
+    coo = sp.coo_matrix(matrix, dtype=float)
+    coo.sum_duplicates()
+    coo.eliminate_zeros()
+    return coo
 
 
 @dataclass(frozen=True)

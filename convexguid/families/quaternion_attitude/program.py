@@ -196,7 +196,7 @@ class QuaternionProgram:
         self._guess = np.concatenate([guess.ravel(), [tf_guess] if self.free_time else []])
         self._tf_guess = tf_guess
         self._f, self._jac = rigid_body_dynamics(case.inertia, case.inertia_inv)
-        self._patterns: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._patterns: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self.objective_scale = tf_guess if self.free_time else self._guess_energy(guess)
 
     # --- layout ---
@@ -322,23 +322,45 @@ class QuaternionProgram:
             blocks.append(parts.d_h[:, :, None] / self.K)
         return np.concatenate(blocks, axis=2)
 
-    def _interval_pattern(self, rows_per_interval: int) -> tuple[np.ndarray, np.ndarray]:
-        """(row, col) of ``rows_per_interval`` rows per interval touching nodes k, k+1 and t_f (cached)."""
-        if rows_per_interval in self._patterns:
-            return self._patterns[rows_per_interval]
-        rows, cols = [], []
-        for k in range(self.K):
-            c = np.concatenate([self._cols(k, slice(None)), self._cols(k + 1, slice(None)),
-                                [self.num_variables - 1] if self.free_time else []]).astype(int)
-            r, cc = np.meshgrid(k * rows_per_interval + np.arange(rows_per_interval), c, indexing="ij")
-            rows.append(r.ravel())
-            cols.append(cc.ravel())
-        self._patterns[rows_per_interval] = np.concatenate(rows), np.concatenate(cols)
-        return self._patterns[rows_per_interval]
+    @cached_property
+    def _structure(self) -> tuple[np.ndarray, np.ndarray]:
+        """Masks ``(rows, cols)`` of the entries of the per-interval defect and midpoint-state Jacobians that can
+        be nonzero.
 
-    def _interval_matrix(self, local: np.ndarray) -> sp.coo_matrix:
-        rows, cols = self._interval_pattern(local.shape[1])
-        return sp.coo_matrix((local.ravel(), (rows, cols)), shape=(self.K * local.shape[1], self.num_variables))
+        Read from the Hermite-Simpson partials at a random point: an entry that is not identically zero is
+        nonzero there with probability one. The rate defects do not depend on the quaternions, for instance,
+        and ``q' = Omega(w) q / 2`` has no diagonal. Keeping only these entries keeps explicit zeros out of the
+        convex solver's KKT system (about a third of its factorisation time on the multi-cone case).
+        """
+        rng = np.random.default_rng(20110601)
+        K = self.K
+        xs, us = rng.standard_normal((2, K, NX)), rng.standard_normal((2, K, NU))
+        hs = hermite_simpson_defects(self._f, self._jac, xs[0], us[0], xs[1], us[1], rng.uniform(0.5, 2.0, K))
+        return (np.any(self._interval_local(hs) != 0, axis=0),
+                np.any(self._interval_local(hs.midpoint) != 0, axis=0))
+
+    def _interval_pattern(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(row, col) of the entries in ``mask`` (per-interval rows x [node k, node k+1, t_f]), every interval."""
+        key = mask.tobytes() + bytes(mask.shape)
+        if key in self._patterns:
+            return self._patterns[key]
+        c = np.concatenate([np.arange(2 * NODE), [2 * NODE] if self.free_time else []]).astype(int)
+        r_local, c_local = np.nonzero(mask)
+        offsets = np.arange(self.K)[:, None]
+        rows = (offsets * mask.shape[0] + r_local).ravel()
+        cols = np.where(c[c_local] < 2 * NODE, offsets * NODE + c[c_local], self.num_variables - 1).ravel()
+        self._patterns[key] = rows, cols
+        return self._patterns[key]
+
+    def _interval_matrix(self, local: np.ndarray, mask: np.ndarray) -> sp.coo_matrix:
+        """The per-interval Jacobians ``local`` (``(K, rows, cols)``) as a sparse matrix of the entries in ``mask``."""
+        rows, cols = self._interval_pattern(mask)
+        shape = (self.K * local.shape[1], self.num_variables)
+        return sp.coo_matrix((local[:, mask].ravel(), (rows, cols)), shape=shape)
+
+    def _quaternion_rows(self, count: int) -> np.ndarray:
+        """Mask of ``count`` rows that each combine the midpoint quaternion's partials (a cone or a dot product)."""
+        return np.repeat(np.any(self._structure[1][:4], axis=0, keepdims=True), count, axis=0)
 
     @cached_property
     def _defect_scale(self) -> np.ndarray:
@@ -349,7 +371,8 @@ class QuaternionProgram:
         values = hs.values.ravel() * self._defect_scale
         jac = None
         if jacobians:
-            jac = self._interval_matrix(self._interval_local(hs) * self._defect_scale.reshape(self.K, NX, 1))
+            jac = self._interval_matrix(self._interval_local(hs) * self._defect_scale.reshape(self.K, NX, 1),
+                                        self._structure[0])
         return ConstraintBlock("dynamics_defects", values, jac, "scaled")
 
     def _midpoint_rate_block(self, w_mid: np.ndarray, mid_jac: np.ndarray | None, jacobians: bool) -> ConstraintBlock:
@@ -359,7 +382,8 @@ class QuaternionProgram:
         jac = None
         if jacobians:
             d_w = mid_jac[:, 4:7, :] / w_max
-            jac = self._interval_matrix(np.concatenate([d_w, -d_w], axis=1))
+            rate = self._structure[1][4:7]
+            jac = self._interval_matrix(np.concatenate([d_w, -d_w], axis=1), np.concatenate([rate, rate]))
         return ConstraintBlock("rate_midpoints", values, jac, "of rate_max")
 
     def _forbidden_blocks(self, q: np.ndarray, q_mid: np.ndarray, mid_jac: np.ndarray | None,
@@ -384,7 +408,7 @@ class QuaternionProgram:
                 jac = sp.coo_matrix((np.outer(np.repeat(signed, n1), fb.q).ravel(), (rows, cols)),
                                     shape=(2 * n1, self.num_variables))
                 d_dot = np.einsum("j,kjc->kc", fb.q, mid_jac[:, :4, :])
-                jac_mid = self._interval_matrix(signed[None, :, None] * d_dot[:, None, :])
+                jac_mid = self._interval_matrix(signed[None, :, None] * d_dot[:, None, :], self._quaternion_rows(2))
             blocks.append(ConstraintBlock(f"forbidden_{fb.name}", values, jac, "cos"))
             blocks.append(ConstraintBlock(f"forbidden_{fb.name}_midpoints", values_mid, jac_mid, "cos"))
         return tuple(blocks)
@@ -407,7 +431,8 @@ class QuaternionProgram:
             jac = jac_mid = None
             if jacobians:
                 jac = sp.coo_matrix((sign * grad.ravel(), (rows, cols)), shape=(n1, self.num_variables))
-                jac_mid = self._interval_matrix(sign * np.einsum("kj,kjc->kc", grad_mid, mid_jac[:, :4, :])[:, None])
+                jac_mid = self._interval_matrix(sign * np.einsum("kj,kjc->kc", grad_mid, mid_jac[:, :4, :])[:, None],
+                                                self._quaternion_rows(1))
             blocks.append(ConstraintBlock(f"{kind}_{cone.name}", sign * (c - bound), jac, "cos"))
             blocks.append(ConstraintBlock(f"{kind}_{cone.name}_midpoints", sign * (c_mid - bound), jac_mid, "cos"))
         return tuple(blocks)
