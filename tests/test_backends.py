@@ -40,6 +40,18 @@ def test_backends_agree_on_a_qp_with_known_solution(name):
     np.testing.assert_allclose(backend.solve().x, [0.25, 1.25], atol=1e-6)
 
 
+def test_clarabel_without_iterative_refinement_gives_the_same_answer():
+    """The setting reaches Clarabel (and the fallback of a dense backend), and the solution is unchanged."""
+    plain = make_backend("clarabel", small_qp(), tolerance=1e-9, iterative_refinement=False)
+    assert plain._solver.get_settings().iterative_refinement_enable is False
+    assert make_backend("clarabel", small_qp())._solver.get_settings().iterative_refinement_enable is True
+    res = plain.solve()
+    assert res.status == "optimal"
+    np.testing.assert_allclose(res.x, [0.2, 0.8], atol=1e-6)
+    fallback = make_backend("daqp", small_qp(), fallback="clarabel", iterative_refinement=False)
+    assert isinstance(fallback, FallbackBackend) and fallback.iterative_refinement is False
+
+
 def test_objective_uses_upper_triangle():
     prog = small_qp()
     prog.P = sp.csc_matrix(np.array([[2.0, 1.0], [0.0, 2.0]]))

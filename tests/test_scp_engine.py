@@ -389,6 +389,24 @@ def test_inconsistent_hard_constraints_are_reported_not_raised(kind, backend):
     assert result.x.shape == (2,) and np.all(np.isfinite(result.x))
 
 
+def test_a_start_off_the_boundary_conditions_moves_to_the_nearest_point_in_scaled_units():
+    """Equalities only (closed form): x1 + x2 = 2 from (0, 0) with scales (1, 2) lands at (0.4, 1.6)."""
+    from convexguid.scp.restoration import restore_start
+
+    class OnePlane:
+        num_variables = 2
+
+        def linear_constraints(self) -> LinearConstraints:
+            return LinearConstraints(np.array([[1.0, 1.0]]), np.array([2.0]), np.zeros((0, 2)), np.zeros(0))
+
+        def variable_scale(self) -> np.ndarray:
+            return np.array([1.0, 2.0])
+
+    restored = restore_start(OnePlane(), np.zeros(2))
+    assert restored.feasible
+    np.testing.assert_allclose(restored.x, [0.4, 1.6], rtol=1e-12)
+
+
 # --- 6. the backend setting resolved: assembly and solver ---------------------------------------
 
 @pytest.mark.parametrize(("program", "backend", "label", "condensed"), [

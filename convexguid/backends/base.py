@@ -92,9 +92,12 @@ class Backend(ABC):
     name: str = ""
     supports_soc: bool = False
 
-    def __init__(self, program: ConicProgram, tolerance: float = 1e-8, max_iterations: int = 0) -> None:
+    def __init__(self, program: ConicProgram, tolerance: float = 1e-8, max_iterations: int = 0,
+                 iterative_refinement: bool = True) -> None:
         self.tolerance = tolerance
         self.max_iterations = max_iterations
+        #: refine each KKT solve of an interior-point backend (Clarabel); other backends ignore it
+        self.iterative_refinement = iterative_refinement
         self._pattern = (program.P.indptr.copy(), program.P.indices.copy(),
                          program.A.indptr.copy(), program.A.indices.copy(), program.cones)
         self._setup(program)

@@ -64,27 +64,30 @@ def auto_backend(program: ConicProgram) -> str:
 
 
 def make_backend(name: str, program: ConicProgram, tolerance: float = 1e-8, max_iterations: int = 0,
-                 fallback: str | None = None) -> Backend:
+                 fallback: str | None = None, iterative_refinement: bool = True) -> Backend:
     """Set up backend ``name`` for ``program`` (see :mod:`convexguid.backends`).
 
     ``auto`` picks by :func:`auto_backend` (a dense solve falls back to Clarabel when it is not
     ``optimal``); ``fallback`` names a backend to solve the same program whenever ``name``'s answer is
-    not ``optimal``.
+    not ``optimal``. ``iterative_refinement=False`` skips the refinement of an interior-point
+    backend's KKT solves (Clarabel), for problems where that is measured to change nothing but time.
     """
     check_backend_name(name)
     if name == AUTO:
         chosen = auto_backend(program)
         backend = make_backend(chosen, program, tolerance, max_iterations,
-                               fallback="clarabel" if chosen != "clarabel" else None)
+                               fallback="clarabel" if chosen != "clarabel" else None,
+                               iterative_refinement=iterative_refinement)
         backend.name = f"{AUTO} -> {chosen}"
         return backend
     natives = native_backends()
     if name in natives:
-        backend = natives[name](program, tolerance, max_iterations)
+        backend = natives[name](program, tolerance, max_iterations, iterative_refinement)
     else:
-        backend = QpsolversBackend(name.removeprefix(_QPSOLVERS_PREFIX), program, tolerance, max_iterations)
+        backend = QpsolversBackend(name.removeprefix(_QPSOLVERS_PREFIX), program, tolerance, max_iterations,
+                                   iterative_refinement)
     if fallback is not None and fallback != name:
-        backend = FallbackBackend(backend, fallback, program, tolerance, max_iterations)
+        backend = FallbackBackend(backend, fallback, program, tolerance, max_iterations, iterative_refinement)
     return backend
 
 
@@ -97,13 +100,13 @@ class FallbackBackend(Backend):
     """
 
     def __init__(self, primary: Backend, secondary: str, program: ConicProgram, tolerance: float = 1e-8,
-                 max_iterations: int = 0) -> None:
+                 max_iterations: int = 0, iterative_refinement: bool = True) -> None:
         self.primary, self.secondary_name = primary, secondary
         self.name = f"{primary.name} (else {secondary})"
         self.supports_soc = primary.supports_soc
         self.secondary: Backend | None = None
         self.fallbacks = 0
-        super().__init__(program, tolerance, max_iterations)
+        super().__init__(program, tolerance, max_iterations, iterative_refinement)
 
     def _setup(self, program: ConicProgram) -> None:
         self._program = program
@@ -120,7 +123,8 @@ class FallbackBackend(Backend):
             return first
         start = time.perf_counter()
         if self.secondary is None:
-            self.secondary = make_backend(self.secondary_name, self._program, self.tolerance, self.max_iterations)
+            self.secondary = make_backend(self.secondary_name, self._program, self.tolerance, self.max_iterations,
+                                          iterative_refinement=self.iterative_refinement)
         second = self.secondary.solve()
         self.fallbacks += 1
         elapsed = first.solve_time_s + time.perf_counter() - start

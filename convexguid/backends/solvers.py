@@ -45,6 +45,7 @@ class ClarabelBackend(Backend):
         settings.direct_solve_method = "qdldl"
         settings.tol_gap_abs = settings.tol_gap_rel = self.tolerance
         settings.tol_feas = self.tolerance
+        settings.iterative_refinement_enable = self.iterative_refinement
         if self.max_iterations:
             settings.max_iter = self.max_iterations
         cones = []
@@ -110,10 +111,10 @@ class QpsolversBackend(Backend):
     """Any QP solver known to :mod:`qpsolvers`; solved from scratch each call (for cross-checks)."""
 
     def __init__(self, solver: str, program: ConicProgram, tolerance: float = 1e-8,
-                 max_iterations: int = 0) -> None:
+                 max_iterations: int = 0, iterative_refinement: bool = True) -> None:
         self.solver = solver
         self.name = f"qpsolvers:{solver}"
-        super().__init__(program, tolerance, max_iterations)
+        super().__init__(program, tolerance, max_iterations, iterative_refinement)
 
     def _setup(self, program: ConicProgram) -> None:
         if program.cones.soc:

@@ -182,7 +182,8 @@ class SCPAlgorithm:
         program_k = self.assembler.build(state.x, ev, state.radius, state.penalty, hessian)
         if self.backend is None:
             self.backend = make_backend(self.choice.backend, program_k, self.settings.backend_tolerance,
-                                        fallback=self.choice.fallback)
+                                        fallback=self.choice.fallback,
+                                        iterative_refinement=self.settings.iterative_refinement)
         else:
             self.backend.update(program_k)
         result = self.backend.solve()

@@ -154,6 +154,8 @@ class SCPSettings:
     ``penalty_unit``: ``"absolute"``, or ``"objective"`` (units of the objective at the start
     point, see :class:`~convexguid.scp.policies.PenaltyPolicy`). ``max_backend_failures``
     numerical failures of the convex solver in a row are retried with a smaller trust region.
+    ``iterative_refinement`` refines the interior-point backend's KKT solves (Clarabel's default);
+    a family turns it off where that is measured to change only the time.
     """
 
     backend: str = "auto"
@@ -172,6 +174,7 @@ class SCPSettings:
     backend_tolerance: float = 1e-8
     max_backend_failures: int = 3
     second_order_correction: bool = True
+    iterative_refinement: bool = True
 
     @classmethod
     def from_spec(cls, solver, **overrides) -> SCPSettings:

@@ -52,7 +52,8 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
     """The point nearest ``x0`` on ``A x = b, G x <= h`` (scaled norm), or a certificate of inconsistency.
 
     Solves :math:`\\min \\tfrac12 \\|v\\|^2` s.t. :math:`A(x_0 + S v) = b,\\ G(x_0 + S v) \\le h` with
-    :math:`S` the variable scale. If that has no solution, the elastic LP
+    :math:`S` the variable scale (in closed form, by least squares, when there are only equalities). If that
+    has no solution, the elastic LP
     :math:`\\min 1^T(p + n + s)` s.t. :math:`A S v + p - n = b - A x_0,\\ G S v - s \\le h - G x_0`,
     :math:`p, n, s \\ge 0` gives the least total violation, which is the certificate.
     """
@@ -63,6 +64,12 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
     n, n_a, n_g = x0.size, lin.A.shape[0], lin.G.shape[0]
     A = sp.csc_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))
     rhs = np.concatenate([lin.b - lin.A @ x0, lin.h - lin.G @ x0])
+    if n_g == 0 and n_a <= n:
+        # equalities only: the nearest point is the least-norm solution of A S v = rhs, in closed form
+        dense = A.toarray()
+        v = np.linalg.lstsq(dense, rhs, rcond=None)[0]
+        if linear_violation(lin, x0 + scale * v) <= tolerance:
+            return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
     projection = ConicProgram(sp.identity(n, format="csc"), np.zeros(n), A, rhs, Cones(zero=n_a, nonneg=n_g))
     result = make_backend(CERTIFYING_BACKEND, projection, 1e-10).solve()
     if result.usable:
