@@ -93,6 +93,9 @@ def test_markdown_has_the_table_and_notes(rows):
         assert f"| {method} |" in text
     _ok_row(rows, "scp time")  # the timing note is written for a converged minimum-time SCP only
     assert "SCP minimum time at K = 10 (11 nodes) under 1 s" in text
+    # a file without a target gets the times only
+    other = attitude_bench_markdown(rows, MULTICONE.with_name("my_slew.yaml"), [K], 1)
+    assert "SCP minimum time at K = 10 (11 nodes): whole solve" in other and "met)" not in other
 
 
 def test_bench_command_dispatches_attitude_files(monkeypatch, tmp_path):
