@@ -38,7 +38,7 @@ __all__ = [
     "quat_to_euler321", "quat_multiply", "quat_conjugate", "quat_normalize", "quat_rotate",
     "quat_angle_between", "axis_angle_to_quat", "quat_to_mrp", "mrp_to_quat", "mrp_shadow",
     "quat_rate_matrix", "quat_derivative", "mrp_derivative", "euler321_rates_matrix",
-    "euler321_rates_from_body",
+    "euler321_body_rates", "euler321_rates_from_body",
 ]
 
 GIMBAL_LOCK_TOL = 1e-9
@@ -59,12 +59,20 @@ def _norm(a: NDArray) -> NDArray:
     return np.sqrt(np.sum(a * a, axis=-1))
 
 
+def _matrix3(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
+    """A ``(..., 3, 3)`` array from nine entries (arrays shaped like ``like`` or scalars), filled in place."""
+    out = np.empty(like.shape + (3, 3), dtype=like.dtype)
+    for i, row in enumerate(rows):
+        for j, entry in enumerate(row):
+            out[..., i, j] = entry
+    return out
+
+
 def skew(v: ArrayLike) -> NDArray:
     r"""Cross-product matrix :math:`[v\times]`, :math:`[v\times] u = v \times u`; shape ``(..., 3, 3)``."""
     v = _arr(v, 3)
     x, y, z = np.moveaxis(v, -1, 0)
-    o = np.zeros_like(x)
-    return np.stack([np.stack([o, -z, y], -1), np.stack([z, o, -x], -1), np.stack([-y, x, o], -1)], -2)
+    return _matrix3([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]], x)
 
 
 def euler321_to_dcm(rpy: ArrayLike) -> NDArray:
@@ -82,7 +90,7 @@ def euler321_to_dcm(rpy: ArrayLike) -> NDArray:
     rows = [[ct * cy, ct * sy, -st],
             [sp * st * cy - cp * sy, sp * st * sy + cp * cy, sp * ct],
             [cp * st * cy + sp * sy, cp * st * sy - sp * cy, cp * ct]]
-    return np.stack([np.stack(r, -1) for r in rows], -2)
+    return _matrix3(rows, cp)
 
 
 def dcm_to_euler321(C: ArrayLike) -> NDArray:
@@ -295,9 +303,26 @@ def euler321_rates_matrix(rpy: ArrayLike) -> NDArray:
     """
     a = _arr(rpy, 3)
     cp, sp, ct, st = np.cos(a[..., 0]), np.sin(a[..., 0]), np.cos(a[..., 1]), np.sin(a[..., 1])
-    o, one = np.zeros_like(cp), np.ones_like(cp)
-    rows = [[one, o, -st], [o, cp, sp * ct], [o, -sp, cp * ct]]
-    return np.stack([np.stack(r, -1) for r in rows], -2)
+    return _matrix3([[1.0, 0.0, -st], [0.0, cp, sp * ct], [0.0, -sp, cp * ct]], cp)
+
+
+def euler321_body_rates(rpy: ArrayLike, rates: ArrayLike) -> NDArray:
+    r"""Body rates :math:`\omega_B = E\,[\dot\phi, \dot\theta, \dot\psi]^T` (:func:`euler321_rates_matrix`),
+    written out so no matrix is formed; complex input is supported.
+
+    .. math::
+        \omega_1 = \dot\phi - s_\theta\dot\psi, \quad
+        \omega_2 = c_\phi\dot\theta + s_\phi c_\theta\dot\psi, \quad
+        \omega_3 = -s_\phi\dot\theta + c_\phi c_\theta\dot\psi
+    """
+    a, r = _arr(rpy, 3), _arr(rates, 3)
+    cp, sp, ct, st = np.cos(a[..., 0]), np.sin(a[..., 0]), np.cos(a[..., 1]), np.sin(a[..., 1])
+    pd, td, yd = r[..., 0], r[..., 1], r[..., 2]
+    out = np.empty(np.broadcast_shapes(a.shape, r.shape), dtype=np.result_type(a, r))
+    out[..., 0] = pd - st * yd
+    out[..., 1] = cp * td + sp * ct * yd
+    out[..., 2] = -sp * td + cp * ct * yd
+    return out
 
 
 def euler321_rates_from_body(rpy: ArrayLike, omega_B: ArrayLike) -> NDArray:

@@ -62,14 +62,14 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
         return Restoration(x0, 0.0)
     scale = program.variable_scale()
     n, n_a, n_g = x0.size, lin.A.shape[0], lin.G.shape[0]
-    A = sp.csc_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))
-    rhs = np.concatenate([lin.b - lin.A @ x0, lin.h - lin.G @ x0])
     if n_g == 0 and n_a <= n:
-        # equalities only: the nearest point is the least-norm solution of A S v = rhs, in closed form
-        dense = A.toarray()
-        v = np.linalg.lstsq(dense, rhs, rcond=None)[0]
+        # equalities only: the nearest point is the least-norm solution of A S v = b - A x0, in closed form
+        dense = lin.A.toarray() if sp.issparse(lin.A) else np.asarray(lin.A, dtype=float)
+        v = np.linalg.lstsq(dense * scale, lin.b - dense @ x0, rcond=None)[0]
         if linear_violation(lin, x0 + scale * v) <= tolerance:
             return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
+    A = sp.csc_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))
+    rhs = np.concatenate([lin.b - lin.A @ x0, lin.h - lin.G @ x0])
     projection = ConicProgram(sp.identity(n, format="csc"), np.zeros(n), A, rhs, Cones(zero=n_a, nonneg=n_g))
     result = make_backend(CERTIFYING_BACKEND, projection, 1e-10).solve()
     if result.usable:

@@ -38,7 +38,7 @@ from scipy.interpolate import CubicHermiteSpline
 
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.geometry import PointingCone
-from convexguid.rotations import euler321_rates_from_body, euler321_rates_matrix, euler321_to_dcm
+from convexguid.rotations import euler321_body_rates, euler321_rates_from_body, euler321_to_dcm
 from convexguid.scp.derivatives import pointwise_jacobian, pointwise_jacobians
 from convexguid.scp.problem import (
     ConstraintBlock,
@@ -74,7 +74,7 @@ def euler321_body_acceleration(z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -
 
 def flat_torque(inertia: np.ndarray, z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
     """Torque as a function of the flat outputs, eq. (12): :math:`u = \\Gamma_u(\\zeta, \\dot\\zeta, \\ddot\\zeta)`."""
-    omega = np.einsum("nij,nj->ni", euler321_rates_matrix(z), zd)
+    omega = euler321_body_rates(z, zd)
     return euler_torque(inertia, omega, euler321_body_acceleration(z, zd, zdd))
 
 
@@ -126,7 +126,7 @@ class FlatAttitudeProblem:
 
     def body_rates(self, x: np.ndarray) -> np.ndarray:
         z, zd, _ = self.flat_derivatives(x)
-        return np.einsum("nij,nj->ni", euler321_rates_matrix(z), zd)
+        return euler321_body_rates(z, zd)
 
 
 class FlatAttitudeProgram:
@@ -181,6 +181,10 @@ class FlatAttitudeProgram:
 
     def output_constraints(self) -> OutputConstraints:
         """Torque box, eq. (30), at the nodes and check points: :math:`|L u|_i \\le u_{max}`, linear in the torques."""
+        return self._outputs
+
+    @cached_property
+    def _outputs(self) -> OutputConstraints:
         p = self.problem
         interp = sp.kron(sp.csr_matrix(p.path_interpolation), sp.eye(3), format="csr")
         rows = interp.shape[0]
