@@ -237,6 +237,16 @@ def test_euler_rates_matrix_complex_step(rng):
         np.testing.assert_allclose(omega, explicit, atol=TOL)
 
 
+def test_euler321_body_rates_match_the_dcm_rate_and_invert(rng):
+    """omega from the DCM's complex-step rate (independent of E), and euler321_rates_from_body undoes it."""
+    rpy, rpy_dot = _rpy(rng, 100, 0.01), rng.normal(size=(100, 3))
+    omega = rot.euler321_body_rates(rpy, rpy_dot)
+    for k in range(0, 100, 7):
+        Cdot = rot.euler321_to_dcm(rpy[k] + 1j * H * rpy_dot[k]).imag / H
+        np.testing.assert_allclose(omega[k], _omega_from_dcm_rate(rot.euler321_to_dcm(rpy[k]), Cdot), atol=TOL)
+    np.testing.assert_allclose(rot.euler321_rates_from_body(rpy, omega), rpy_dot, atol=1e-10)
+
+
 def test_euler_rates_from_body_inverts_matrix(rng):
     rpy, w = _rpy(rng, 200, margin=0.01), rng.normal(size=(200, 3))
     rates = rot.euler321_rates_from_body(rpy, w)

@@ -389,6 +389,15 @@ def test_inconsistent_hard_constraints_are_reported_not_raised(kind, backend):
     assert result.x.shape == (2,) and np.all(np.isfinite(result.x))
 
 
+def test_linear_constraints_sparse_keeps_the_values_and_drops_explicit_zeros():
+    lin = LinearConstraints(np.array([[1.0, 0.0, 2.0], [0.0, 0.0, 0.0]]), np.zeros(2),
+                            np.array([[0.0, -3.0, 0.0]]), np.zeros(1))
+    sparse = lin.sparse()
+    assert sparse.A.nnz == 2 and sparse.G.nnz == 1
+    np.testing.assert_array_equal(sparse.A.toarray(), lin.A)
+    np.testing.assert_array_equal(sparse.G.toarray(), lin.G)
+
+
 def test_a_start_off_the_boundary_conditions_moves_to_the_nearest_point_in_scaled_units():
     """Equalities only (closed form): x1 + x2 = 2 from (0, 0) with scales (1, 2) lands at (0.4, 1.6)."""
     from convexguid.scp.restoration import restore_start

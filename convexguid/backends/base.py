@@ -55,10 +55,13 @@ class ConicProgram:
     def num_variables(self) -> int:
         return self.q.size
 
+    def hessian_times(self, x: np.ndarray) -> np.ndarray:
+        """:math:`P x` for the symmetric ``P`` whose upper triangle is stored."""
+        return self.P @ x + self.P.T @ x - self.P.diagonal() * x
+
     def objective(self, x: np.ndarray) -> float:
         """:math:`\\tfrac12 x^T P x + q^T x` + ``constant``, with ``P`` stored as its upper triangle."""
-        px = self.P @ x + self.P.T @ x - self.P.diagonal() * x
-        return float(0.5 * x @ px + self.q @ x + self.constant)
+        return float(0.5 * x @ self.hessian_times(x) + self.q @ x + self.constant)
 
 
 @dataclass(frozen=True)

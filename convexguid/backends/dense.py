@@ -264,7 +264,7 @@ class DaqpBackend(Backend):
         if x is None:
             return BackendResult(status, None, float("nan"), iterations, time.perf_counter() - start,
                                  float("nan"), float("nan"))
-        px = prog.P @ x + prog.P.T @ x - prog.P.diagonal() * x
+        px = prog.hessian_times(x)
         objective = float(0.5 * x @ px + prog.q @ x)
         s = prog.b - prog.A @ x
         nz = prog.cones.zero

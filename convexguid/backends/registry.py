@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import time
+from functools import cache
 
 from convexguid.backends.base import Backend, BackendResult, ConicProgram
 from convexguid.backends.solvers import ClarabelBackend, OsqpBackend, QpsolversBackend
@@ -22,8 +23,9 @@ DENSE_MIN_DENSITY = 0.3
 """... whose constraint matrix (or, in the SCP, whose Jacobians) have at least this share of nonzeros."""
 
 
+@cache
 def native_backends() -> dict[str, type[Backend]]:
-    """The backends this package drives directly, by name (``daqp`` when it is installed)."""
+    """The backends this package drives directly, by name (``daqp`` when it is installed; looked up once)."""
     from convexguid.backends.dense import DaqpBackend
 
     natives: dict[str, type[Backend]] = {"clarabel": ClarabelBackend, "osqp": OsqpBackend}

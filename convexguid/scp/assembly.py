@@ -163,7 +163,6 @@ class SubproblemAssembler:
         return z[: self.n] * self.scale
 
 
-
 def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
                       counts: tuple[int, int, int]) -> None:
     """The rows after the output constraints, shared by the lifted and the condensed subproblem.
@@ -188,6 +187,7 @@ def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts
     row += n_slack
     pat.add_diagonal(row, 0, n)
     pat.add_diagonal(row + n, 0, n)
+
 
 def _add_jacobian(pat: _Pattern, row0: int, jacobian: np.ndarray | sp.spmatrix | None, rows: int, n: int) -> None:
     if sp.issparse(jacobian):

@@ -196,7 +196,7 @@ class QuaternionProgram:
         self._guess = np.concatenate([guess.ravel(), [tf_guess] if self.free_time else []])
         self._tf_guess = tf_guess
         self._f, self._jac = rigid_body_dynamics(case.inertia, case.inertia_inv)
-        self._patterns: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+        self._patterns: dict[tuple[tuple[int, ...], bytes], tuple[np.ndarray, np.ndarray]] = {}
         self.objective_scale = tf_guess if self.free_time else self._guess_energy(guess)
 
     # --- layout ---
@@ -341,7 +341,7 @@ class QuaternionProgram:
 
     def _interval_pattern(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(row, col) of the entries in ``mask`` (per-interval rows x [node k, node k+1, t_f]), every interval."""
-        key = mask.tobytes() + bytes(mask.shape)
+        key = (mask.shape, mask.tobytes())
         if key in self._patterns:
             return self._patterns[key]
         c = np.concatenate([np.arange(2 * NODE), [2 * NODE] if self.free_time else []]).astype(int)
