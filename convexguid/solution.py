@@ -130,6 +130,8 @@ class Solution:
     figures: Figures | None = None
     timing: dict[str, float] = field(default_factory=dict)
     repair_rounds: list[RepairRound] = field(default_factory=list)
+    kkt: dict | None = None
+    """KKT residuals of the planned iterate (:meth:`convexguid.scp.kkt.KKTResiduals.summary`); None when not planned."""
 
     @property
     def ok(self) -> bool:
@@ -173,6 +175,7 @@ class Solution:
             "timing": self.timing,
             "verification": self.verification.to_dict() if self.verification else None,
             "repair_rounds": [r.to_dict() for r in self.repair_rounds],
+            "kkt": self.kkt,
         }
         if self.figures is not None:
             out.update(self.figures.to_dict())
@@ -188,7 +191,7 @@ def make_solution(spec, *, status: str, message: str, started: float, objective:
                   history: list[IterationRecord] | None = None, nodes: Trajectory | None = None,
                   dense: Trajectory | None = None, figures: Figures | None = None,
                   timing: dict[str, float] | None = None,
-                  repair_rounds: list[RepairRound] | None = None) -> Solution:
+                  repair_rounds: list[RepairRound] | None = None, kkt: dict | None = None) -> Solution:
     """The one constructor of a :class:`Solution`.
 
     Problem, family and method come from ``spec``, the solver from ``spec.solver.backend`` unless ``solver``
@@ -198,7 +201,7 @@ def make_solution(spec, *, status: str, message: str, started: float, objective:
                     iterations=iterations, size=size, wall_time_s=time.perf_counter() - started,
                     solver=solver if solver is not None else spec.solver.backend, message=message,
                     verification=verification, history=list(history or []), nodes=nodes, dense=dense,
-                    figures=figures, timing=dict(timing or {}), repair_rounds=list(repair_rounds or []))
+                    figures=figures, timing=dict(timing or {}), repair_rounds=list(repair_rounds or []), kkt=kkt)
 
 
 def planned_solution(spec, outcome: VerifiedSolve, started: float, size: ProgramSize, *,
@@ -215,7 +218,8 @@ def planned_solution(spec, outcome: VerifiedSolve, started: float, size: Program
                          objective=result.objective, iterations=result.iterations, size=size,
                          verification=outcome.check.verification if outcome.check is not None else None,
                          history=result.history, nodes=nodes, dense=dense, figures=figures,
-                         timing=result.timing(), repair_rounds=outcome.rounds, solver=result.solver or None)
+                         timing=result.timing(), repair_rounds=outcome.rounds, solver=result.solver or None,
+                         kkt=result.kkt)
 
 
 def _finite(value: float | None) -> float | None:

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
@@ -49,6 +50,23 @@ def write_campaign(folder: Path, name: str = "campaign.yaml", **changes) -> Path
 def table(path: Path):
     """The results table without the wall times (the one column that differs between sessions)."""
     return pq.read_table(path).drop(["wall_time_s"])
+
+
+def assert_same_runs(got: Path, expected: Path) -> None:
+    """The same runs with the same statuses, texts and figures (numbers to 1e-9 relative).
+
+    Another process may sum in another order (its BLAS threads, say): its answers agree to round-off, not to the
+    last bit, and a test must not ask for more than the solver's tolerances can promise.
+    """
+    a, b = table(got), table(expected)
+    assert a.schema == b.schema and a.num_rows == b.num_rows
+    for name in a.column_names:
+        left, right = a.column(name).to_pylist(), b.column(name).to_pylist()
+        if pa.types.is_floating(a.schema.field(name).type):
+            assert np.allclose(np.array(left, dtype=float), np.array(right, dtype=float), rtol=1e-9, atol=0,
+                               equal_nan=True), name
+        else:
+            assert left == right, name
 
 
 @pytest.fixture(scope="module")
@@ -116,7 +134,7 @@ def test_local_cluster_gives_the_serial_results_run_for_run(serial, tmp_path, mo
     assert tasks[0].problem == yaml.safe_load(PROBLEM.read_text()) and Path(tasks[0].source) == PROBLEM
     result = run_campaign(path, tmp_path / "out", workers=2)
     assert result.workers == 2 and result.executed == 4
-    assert table(result.table).equals(table(expected.table))
+    assert_same_runs(result.table, expected.table)
 
 
 def test_interrupted_campaign_resumes_to_the_uninterrupted_table(serial, tmp_path):
@@ -137,7 +155,7 @@ def test_interrupted_campaign_resumes_to_the_uninterrupted_table(serial, tmp_pat
     resumed = run_campaign(write_campaign(folder), out, serial=True)
     assert (resumed.executed, resumed.finished) == (2, 4)
     assert set(pq.read_table(out / "results.parquet").column("run_id").to_pylist()) == {0, 1, 2, 3}
-    assert table(out / "results.parquet").equals(table(expected.table))
+    assert_same_runs(out / "results.parquet", expected.table)
     again = run_campaign(write_campaign(folder), out, serial=True)
     assert again.executed == 0 and again.finished == 4
 

@@ -83,7 +83,7 @@ def assembled_subproblem(x, ev, lin, out, scale, cost, weights, radius, rho, ass
     program = assembler.build(x, ev, radius, rho)
     result = make_backend(backend, program, tolerance=1e-10).solve()
     assert result.status == "optimal", result.status
-    return program.objective(result.x), assembler.step(result.x), assembler.equality_multipliers(result.z)
+    return program.objective(result.x), assembler.step(result.x), assembler.multipliers(result.z).equality
 
 
 def flat_attitude_case(nodes: int = 8):

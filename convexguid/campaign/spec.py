@@ -50,7 +50,7 @@ DottedKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_]+(\.[A-Za-z0-9_]+)*$")]
 """A key path as for ``--set``: names and list indices joined by dots."""
 
 SUMMARY_KEYS = ("objective", "iterations", "num_variables", "num_equality_constraints",
-                "num_inequality_constraints", "wall_time_s", "timing", "verification", "repair_rounds")
+                "num_inequality_constraints", "wall_time_s", "timing", "verification", "repair_rounds", "kkt")
 """Numeric (or nested) keys every summary has besides the family's figures; a figure path may start with one."""
 
 PROSE_KEYS = ("description", "notes", "reference")

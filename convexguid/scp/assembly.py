@@ -25,10 +25,13 @@ copies numbers and the backend keeps its symbolic factorisation.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram
+from convexguid.scp.lagrangian import Multipliers
 from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 
 
@@ -90,9 +93,7 @@ class SubproblemAssembler:
         self.num_z = n + self.m + self.n_slack
         y0, so0, sg0, t0 = n, n + self.m, n + self.m + n_o, n + self.m + n_o + self.n_ineq
         self.cones = Cones(zero=n_a + self.m, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n)
-        #: first row of the +eq and -eq blocks (their multipliers give the equality duals)
-        eq_start = self.cones.zero + n_g + n_o + self.n_ineq
-        self.eq_rows = (eq_start, eq_start + self.n_eq)
+        self.layout = DualLayout(n_a, self.m, n_g, n_o, self.n_ineq, self.n_eq)
         pat = _Pattern((self.cones.rows, self.num_z))
         # zero cone: A d = b - A x ; J d - y = -r
         _add_jacobian(pat, 0, linear.A, n_a, n)
@@ -153,14 +154,39 @@ class SubproblemAssembler:
         q *= self._column_scale
         return ConicProgram(P, q, A, b, self.cones)
 
-    def equality_multipliers(self, z: np.ndarray) -> np.ndarray:
-        """Multipliers :math:`\\lambda` of the linearized equalities (``e + \\nabla e\\, d = 0``) from row duals."""
-        plus, minus = self.eq_rows
-        return z[plus: plus + self.n_eq] - z[minus: minus + self.n_eq]
+    def multipliers(self, z: np.ndarray) -> Multipliers:
+        """The nonlinear program's multipliers from the subproblem's row duals (see ``DualLayout``)."""
+        return self.layout.multipliers(z)
 
     def step(self, z: np.ndarray) -> np.ndarray:
         """The step ``d`` from a subproblem solution (whose first block is ``d`` in scaled units)."""
         return z[: self.n] * self.scale
+
+
+@dataclass(frozen=True)
+class DualLayout:
+    """Where each constraint's rows sit in a subproblem, shared by the lifted and the condensed form.
+
+    Zero cone: ``A`` (``linear_equalities`` rows), then the lifted form's ``J d - y = -r`` rows
+    (``residuals``; none in the condensed form). Nonnegative cone: ``G``, the output constraints, the
+    linearized inequalities, the linearized equalities as ``+`` and ``-`` rows, then slacks and trust region.
+    The equality multiplier is the ``+`` row's dual less the ``-`` row's.
+    """
+
+    linear_equalities: int
+    residuals: int
+    linear_inequalities: int
+    outputs: int
+    inequalities: int
+    equalities: int
+
+    def multipliers(self, z: np.ndarray) -> Multipliers:
+        sizes = [self.linear_equalities, self.residuals, self.linear_inequalities, self.outputs, self.inequalities,
+                 self.equalities, self.equalities]
+        ends = np.cumsum(sizes)
+        a, _, g, o, i, plus, minus = (z[end - size: end] for end, size in zip(ends, sizes, strict=True))
+        return Multipliers(equality=plus - minus, inequality=i.copy(), output=o.copy(), linear_equality=a.copy(),
+                           linear_inequality=g.copy())
 
 
 def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],

@@ -37,7 +37,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram
-from convexguid.scp.assembly import _add_jacobian, _jacobian_data, _Pattern, _values, add_softened_rows
+from convexguid.scp.assembly import DualLayout, _add_jacobian, _jacobian_data, _Pattern, _values, add_softened_rows
+from convexguid.scp.lagrangian import Multipliers
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
 
 
@@ -63,9 +64,7 @@ class CondensedAssembler:
         self.num_z = n + self.n_slack
         so0, sg0, t0 = n, n + n_o, n + n_o + self.n_ineq
         self.cones = Cones(zero=n_a, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n)
-        #: first row of the +eq and -eq blocks (their multipliers give the equality duals)
-        eq_start = n_a + n_g + n_o + self.n_ineq
-        self.eq_rows = (eq_start, eq_start + self.n_eq)
+        self.layout = DualLayout(n_a, 0, n_g, n_o, self.n_ineq, self.n_eq)
         pat = _Pattern((self.cones.rows, self.num_z))
         _add_jacobian(pat, 0, linear.A, n_a, n)
         row = n_a
@@ -122,10 +121,9 @@ class CondensedAssembler:
         q[:n] = 2.0 * (WJ.T @ r) + self._cost_u
         return ConicProgram(P, q, A, b, self.cones, constant=float(self.weights @ r**2))
 
-    def equality_multipliers(self, z: np.ndarray) -> np.ndarray:
-        """Multipliers :math:`\\lambda` of the linearized equalities (``e + \\nabla e\\, d = 0``) from row duals."""
-        plus, minus = self.eq_rows
-        return z[plus: plus + self.n_eq] - z[minus: minus + self.n_eq]
+    def multipliers(self, z: np.ndarray) -> Multipliers:
+        """The nonlinear program's multipliers from the subproblem's row duals (see ``DualLayout``)."""
+        return self.layout.multipliers(z)
 
     def step(self, z: np.ndarray) -> np.ndarray:
         """The step ``d`` from a subproblem solution (whose first block is ``d`` in scaled units)."""

@@ -20,15 +20,19 @@ start point into an :class:`~convexguid.scp.state.IterationState`, and each
 5. stop, or raise the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) when the
    iterates stall with constraints violated.
 
-The objective's residuals are linearized (Gauss-Newton), so the subproblem is a convex QP whose
-fixed point is a KKT point of the nonlinear program. A program may also supply the curvature of
-its equality constraints, a nonnegative diagonal :math:`H \\approx \\sum_i \\lambda_i \\nabla^2 e_i(x)`
-evaluated with the multipliers of the previous subproblem (``lagrangian_curvature``); it enters
-the model as :math:`\\tfrac12 d^T H d`, an S :math:`\\ell_1` QP step (Fletcher 1985). Without it a
-purely linear objective gives linear programs, which crawl when the optimum is not a vertex.
+The objective's residuals are linearized (Gauss-Newton). From the second iteration on, the model
+also carries the curvature of the Lagrangian, weighted by the multipliers of the previous
+subproblem and made convex on the directions the active constraints leave free
+(:mod:`convexguid.scp.lagrangian`): an S :math:`\\ell_1` QP step (Fletcher 1985) whose end game is
+Newton's, where a linear model alone would crawl at a linear rate whenever the optimum is not a vertex.
 
-Statuses: ``converged`` (scaled step or predicted decrease below the tolerance at a feasible
-iterate); ``infeasible`` only with a certificate: the hard linear constraints admit no point (an
+Statuses: ``converged`` when the KKT conditions hold at a feasible iterate (:mod:`convexguid.scp.kkt`,
+stationarity and complementarity relative to the objective within ``kkt_tolerance``), or when the
+scaled step or the predicted decrease falls below ``tolerance`` there (the KKT residuals are then
+reported, and named in the message when above their tolerance); in both cases only if the reduced
+Hessian shows no direction of negative curvature (a stationary point with one is a saddle: the
+engine steps off it along that direction and goes on, :data:`MAX_ESCAPES` times at most);
+``infeasible`` only with a certificate: the hard linear constraints admit no point (an
 elastic LP, :func:`~convexguid.scp.restoration.restore_start`), or the elastic phase-1 problem
 (:class:`~convexguid.scp.restoration.ElasticPhase1`), run when the iterates stall infeasible at
 the largest penalty, itself stalls with the violation positive; ``max_iterations``; and
@@ -49,6 +53,9 @@ from convexguid.progress import report
 from convexguid.scp.assembly import SubproblemAssembler
 from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
+from convexguid.scp.endgame import LocalModel, NewtonStep, SecondOrderModels, linearized_violation
+from convexguid.scp.kkt import kkt_residuals
+from convexguid.scp.lagrangian import MAX_DENSE_SIZE, jacobian_structure
 from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
@@ -68,6 +75,16 @@ So small a violation may be at the accuracy of the subproblem's solution; raisin
 only makes the merit function noisier, while minimising the violation alone removes it in a few
 steps. A later stall raises the penalty as usual.
 """
+
+
+MAX_ESCAPES = 2
+"""Steps off a saddle (a stationary point with negative curvature) one run may take."""
+
+PENALTY_OVER_MULTIPLIERS = 10.0
+"""The end game judges Newton's step with a penalty weight at most this many times the largest multiplier."""
+
+NEGATIVE_CURVATURE = 1e-6
+"""A reduced-Hessian eigenvalue below minus this share of the Hessian's size is negative curvature."""
 
 
 def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
@@ -121,6 +138,7 @@ class SCPAlgorithm:
         self.outputs = program.output_constraints()
         self.scale = program.variable_scale()
         self.curvature = getattr(program, "lagrangian_curvature", None)
+        self.second_order: SecondOrderModels | None = None
         self.assembler: SubproblemAssembler | CondensedAssembler | None = None
         self.choice: SubproblemChoice | None = None
         self.backend: Backend | None = None
@@ -169,6 +187,10 @@ class SCPAlgorithm:
             self.assembler = assembler(self.program.num_variables, raw, self.program.linear_constraints(),
                                        self.outputs, self.scale, self.cost, self.weights,
                                        curvature=self.curvature is not None)
+            n = self.program.num_variables
+            if self.settings.second_order and jacobian_structure(raw, n).nnz and n <= MAX_DENSE_SIZE:
+                self.second_order = SecondOrderModels(self.program, raw, self.scale, self.weights, self.cost,
+                                                      self.outputs)
         return state
 
     @property
@@ -207,8 +229,8 @@ class SCPAlgorithm:
         report("SCP phase-1 iteration" if self.phase1 else "SCP iteration", state.iteration + 1)
         state.iteration += 1
         hessian = None
-        if self.curvature is not None and state.multipliers:
-            hessian = np.maximum(self.curvature(state.x, state.multipliers), 0.0)
+        if self.curvature is not None and state.multipliers is not None:
+            hessian = np.maximum(self.curvature(state.x, state.multipliers.by_block(state.raw)), 0.0)
         result, model = self._solve_subproblem(state, state.raw, hessian)
         if not result.usable:
             # Numerical trouble (the start meets the hard constraints, so d = 0 is always feasible):
@@ -222,8 +244,10 @@ class SCPAlgorithm:
             return self._check_limit(state)
         state.failures = 0
         d = self.assembler.step(result.x)
-        if self.curvature is not None and result.z is not None:
-            state.multipliers = _split_by_block(self.assembler.equality_multipliers(result.z), state.raw)
+        if result.z is not None:
+            state.multipliers = self.assembler.multipliers(result.z)
+            if self._newton(state, result, d):
+                return self._check_limit(state)
         predicted = state.merit - model
         x_new = state.x + d
         raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
@@ -246,23 +270,198 @@ class SCPAlgorithm:
             state.x, state.merit = x_new, merit_new
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
             state.objective = self._objective(state.ev, state.x)
+            self._measure_kkt(state)
         state.radius = self.trust_region.update(state.radius, ratio, step)
         self._record(state, step, ratio, accepted, result)
-        small_step = step <= s.tolerance
-        # the main loop measures decrease against max(1, |merit|); phase 1's merit is the violation itself,
-        # so a decrease is small only relative to what is left to remove
-        unit = abs(state.merit) if self.phase1 else max(1.0, abs(state.merit))
-        small_decrease = 0 <= predicted <= s.tolerance * unit
-        if small_step or small_decrease or self.trust_region.collapsed(state.radius):
+        if accepted and self._kkt_met(state):
+            self._optimal(state, "KKT conditions met")
+            return self._check_limit(state)
+        if self._small(state, step, predicted):
             self._stalled(state)
         return self._check_limit(state)
 
+    # --- the second-order end game ----------------------------------------------------------------
+    def _newton(self, state: IterationState, result: BackendResult, first_order_step: np.ndarray) -> bool:
+        """Try Newton's step on the working set the subproblem just found (:mod:`convexguid.scp.endgame`).
+
+        Tried once the iterate is within ``second_order_violation`` of feasibility and the first-order step
+        ``first_order_step`` stays inside the trust region (the subproblem then found its working set, not the
+        box's edge), shortened to the trust region, and judged by the ratio test like any step, with a
+        second-order correction when the ratio is poor. The merit's penalty weight is first brought down to
+        :data:`PENALTY_OVER_MULTIPLIERS` times the largest multiplier when it is above that: any weight above
+        the multipliers makes the penalty exact, and a far larger one only magnifies the curvature error of a
+        long step (Nocedal & Wright Sec. 18.3).
+        Returns whether the step was taken (the iteration is then recorded and done).
+        """
+        s = self.settings
+        if self.second_order is None or self.phase1 or max_violation(state.ev) > s.second_order_violation:
+            return False
+        if float(np.max(np.abs(first_order_step) / self.scale, initial=0.0)) >= 0.99 * state.radius:
+            # the first-order step still runs into the trust region: the working set is not settled yet
+            return False
+        t = time.perf_counter()
+        model = self.second_order.at(state.x, state.raw, state.multipliers, s.feasibility_tolerance, state.penalty)
+        model, newton = self._newton_on_bounds(state, model)
+        state.convexify_time_s += time.perf_counter() - t
+        length = 0.0 if newton.step is None else float(np.max(np.abs(newton.step), initial=0.0))
+        if length <= s.tolerance * 1e-3:
+            # no step (the reduced Hessian is not positive definite, or a bound stops it at once)
+            return False
+        radius = min(state.radius, state.newton_radius)
+        full = length <= radius and not newton.shortened
+        if length > radius:
+            # a trust region holds every step: Newton's direction, shortened to its boundary
+            newton = replace(newton, step=newton.step * (radius / length))
+        rho = min(state.penalty, PENALTY_OVER_MULTIPLIERS * state.multipliers.largest())
+        merit = self._merit(state.ev, state.x, rho)
+        predicted = merit - self._model_merit(state, model, newton.step, rho)
+        x_new, ev_new, raw_new = self._trial(state, newton.step)
+        merit_new = self._merit(ev_new, x_new, rho)
+        ratio = _ratio(merit - merit_new, predicted)
+        if ratio < self.correction.threshold:
+            # Maratos: the working set's values at the trial point, cancelled by a least-norm correction
+            corrected = newton.step + model.correction(self.second_order.working_values(model, raw_new, x_new))
+            corrected = self.second_order.onto_equalities(state.x, corrected)
+            if (np.max(np.abs(corrected), initial=0.0) <= 2.0 * state.radius
+                    and not np.any(self.second_order.broken_bounds(state.x, corrected))):
+                x_soc, ev_soc, raw_soc = self._trial(state, corrected)
+                merit_soc = self._merit(ev_soc, x_soc, rho)
+                ratio_soc = _ratio(merit - merit_soc, predicted)
+                if ratio_soc > ratio:
+                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
+        step = float(np.max(np.abs(x_new - state.x) / self.scale, initial=0.0))
+        if ratio < s.accept_ratio:
+            # Newton's own radius: a quarter of the step that failed, until a good step frees it again
+            state.newton_radius = 0.25 * step
+            return False
+        if ratio >= self.trust_region.expand:
+            state.newton_radius = np.inf
+        state.x, state.merit, state.penalty = x_new, merit_new, rho
+        state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
+        state.objective = self._objective(state.ev, state.x)
+        state.multipliers = model.working.multipliers(newton.multipliers, state.multipliers)
+        self._measure_kkt(state)
+        state.radius = self.trust_region.update(state.radius, ratio, step)
+        self._record(state, step, ratio, True, replace(result, status="newton"))
+        if self._kkt_met(state):
+            self._optimal(state, "KKT conditions met")
+        elif full and self._small(state, step, predicted):
+            # only a whole Newton step that is small says the iterates stopped (a cut one may just be short)
+            self._stalled(state)
+        return True
+
+    def _small(self, state: IterationState, step: float, predicted: float) -> bool:
+        """The step, or the decrease the model predicted for it, is below the tolerance (or the radius collapsed)."""
+        # the main loop measures decrease against max(1, |merit|); phase 1's merit is the violation itself,
+        # so a decrease is small only relative to what is left to remove
+        unit = abs(state.merit) if self.phase1 else max(1.0, abs(state.merit))
+        small_decrease = 0 <= predicted <= self.settings.tolerance * unit
+        return step <= self.settings.tolerance or small_decrease or self.trust_region.collapsed(state.radius)
+
+    def _newton_on_bounds(self, state: IterationState, model: LocalModel):
+        """Newton's step on the hard equalities and within the hard inequalities.
+
+        The hard inequalities the step breaks join the working set and the step is solved again (twice at most);
+        what it still breaks after that cuts it short, at the first bound it meets.
+        """
+        newton = self._on_equalities(state, model.newton())
+        for _ in range(2):
+            if newton.step is None:
+                return model, newton
+            broken = self.second_order.broken_bounds(state.x, newton.step)
+            if not np.any(broken):
+                return model, newton
+            model = self.second_order.with_bounds(model, state.raw, state.x, broken)
+            newton = self._on_equalities(state, model.newton())
+        if newton.step is not None:
+            fraction = self.second_order.fraction_to_bounds(state.x, newton.step)
+            newton = replace(newton, step=newton.step * fraction, shortened=fraction < 1.0)
+        return model, newton
+
+    def _on_equalities(self, state: IterationState, newton: NewtonStep) -> NewtonStep:
+        if newton.step is None:
+            return newton
+        return replace(newton, step=self.second_order.onto_equalities(state.x, newton.step))
+
+    def _trial(self, state: IterationState, u: np.ndarray) -> tuple[np.ndarray, Evaluation, Evaluation]:
+        """``(x, ev, raw)`` at the iterate moved by the scaled step ``u`` (no Jacobians)."""
+        x_new = state.x + u * self.scale
+        raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
+        return x_new, ev_new, raw_new
+
+    def _model_merit(self, state: IterationState, model: LocalModel, u: np.ndarray, rho: float) -> float:
+        """The second-order model of the merit function (penalty weight ``rho``) after the scaled step ``u``."""
+        d = u * self.scale
+        return state.objective + model.quadratic(u) + rho * linearized_violation(state.raw, self.outputs, d)
+
+    # --- optimality ---------------------------------------------------------------------------
+    def _measure_kkt(self, state: IterationState) -> None:
+        """KKT residuals at the iterate with the last subproblem's multipliers (none yet: left unmeasured)."""
+        if state.multipliers is None or self.phase1:
+            return
+        state.kkt = kkt_residuals(state.x, state.raw, state.multipliers, weights=self.weights, cost=self.cost,
+                                  linear=self.program.linear_constraints(), outputs=self.outputs, scale=self.scale,
+                                  objective=state.objective, objective_at_start=self.objective_at_start,
+                                  feasibility=max_violation(state.ev))
+
+    def _kkt_met(self, state: IterationState) -> bool:
+        s = self.settings
+        return (not self.phase1 and state.kkt is not None
+                and state.kkt.met(s.kkt_tolerance, s.feasibility_tolerance))
+
+    def _optimal(self, state: IterationState, why: str) -> None:
+        """A KKT point: converged, unless the reduced Hessian has negative curvature (then step off the saddle)."""
+        if self.second_order is not None and not self.phase1 and state.escapes < MAX_ESCAPES \
+                and state.multipliers is not None:
+            model = self.second_order.at(state.x, state.raw, state.multipliers, self.settings.feasibility_tolerance,
+                                        state.penalty)
+            newton = model.newton()
+            size = max(float(np.max(np.abs(model.hessian), initial=0.0)), 1e-12)
+            if newton.step is None and newton.smallest_eigenvalue < -NEGATIVE_CURVATURE * size:
+                self._escape(state, newton.negative_direction, newton.smallest_eigenvalue)
+                return
+        state.finish("converged", "; ".join([why, *state.escape_log]))
+
+    def _escape(self, state: IterationState, direction: np.ndarray, curvature: float) -> None:
+        """Step off a saddle along its direction of negative curvature (scaled ``direction``) and go on.
+
+        The step is the initial trust radius (halved while the merit function does not drop, three times
+        at most); whatever it finds, the run goes on from there with the initial radius.
+        """
+        state.escapes += 1
+        radius = self.trust_region.initial
+        for _ in range(4):
+            x_try = state.x + radius * direction * self.scale
+            _, ev_try = self._evaluate(state, x_try, jacobians=False)
+            if self._merit(ev_try, x_try, state.penalty) < state.merit:
+                break
+            radius *= 0.5
+        state.x = x_try
+        state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
+        state.objective = self._objective(state.ev, state.x)
+        state.merit = self._merit(state.ev, state.x, state.penalty)
+        state.radius = self.trust_region.initial
+        state.kkt = None
+        state.escape_log.append(f"stepped off a saddle (reduced-Hessian eigenvalue {curvature:.3g}) "
+                                f"at iteration {state.iteration}")
+
     def _stalled(self, state: IterationState) -> None:
-        """The iterates stopped moving: converged if feasible, else raise the penalty or certify."""
-        if max_violation(state.ev) <= self.settings.feasibility_tolerance:
-            state.finish("converged", "trust region collapsed: no decrease found near a feasible point"
-                         if self.trust_region.collapsed(state.radius) else
-                         "step and predicted decrease below tolerance")
+        """The iterates stopped moving: converged if feasible, else raise the penalty or certify.
+
+        A stall at a feasible point is reported ``converged`` with its KKT residuals; when they are above the
+        tolerance the message says so (a first-order model's small step is not yet proof of optimality).
+        """
+        s = self.settings
+        if max_violation(state.ev) <= s.feasibility_tolerance:
+            why = ("trust region collapsed: no decrease found near a feasible point"
+                   if self.trust_region.collapsed(state.radius) else "step and predicted decrease below tolerance")
+            if state.kkt is None:
+                self._measure_kkt(state)
+            if state.kkt is not None and not self._kkt_met(state):
+                why += (f" (KKT residuals above tolerance {s.kkt_tolerance:g}: stationarity "
+                        f"{state.kkt.relative_stationarity:.2g}, complementarity "
+                        f"{state.kkt.relative_complementarity:.2g} relative)")
+            self._optimal(state, why)
             return
         if self.phase1:
             state.finish("infeasible", "the elastic phase-1 problem stalls with the constraints still violated: "
@@ -304,7 +503,7 @@ class SCPAlgorithm:
         state.solver_time_s += p1.solver_time_s
         state.convexify_time_s += p1.convexify_time_s
         if p1.status == "converged":
-            state.x, state.raw, state.ev = p1.x, p1.raw, p1.ev
+            state.x, state.raw, state.ev, state.kkt = p1.x, p1.raw, p1.ev, None
             state.objective = self._objective(state.ev, state.x)
             state.merit = self._merit(state.ev, state.x, state.penalty)
             state.radius = self.trust_region.initial
@@ -329,10 +528,14 @@ class SCPAlgorithm:
                          max_violation=max_violation(state.ev), violations=violation_by_block(state.ev),
                          iterations=state.iteration, history=state.history, message=state.message,
                          wall_time_s=time.perf_counter() - state.started, convexify_time_s=state.convexify_time_s,
-                         solver_time_s=state.solver_time_s, solver=self.solver_label)
+                         solver_time_s=state.solver_time_s, solver=self.solver_label,
+                         kkt=None if state.kkt is None else state.kkt.summary(self.settings.kkt_tolerance,
+                                                                              self.settings.feasibility_tolerance),
+                         notes=tuple(state.escape_log), penalty=state.penalty)
 
-    def run(self, x0: np.ndarray | None = None) -> SCPResult:
-        state = self.initialize(x0)
+    def run(self, x0: np.ndarray | None = None, penalty: float | None = None) -> SCPResult:
+        """The loop from ``x0`` to its end; ``penalty`` starts the penalty weight (default: the policy's start)."""
+        state = self.initialize(x0, penalty)
         while not state.finished:
             self.step(state)
         return self.result(state)
@@ -343,11 +546,3 @@ def solve_scp(program: NonconvexProgram, settings: SCPSettings, log: Log | None 
     """Run the SCP loop on ``program`` from ``x0`` (default: its initial guess)."""
     return SCPAlgorithm(program, settings, log).run(x0)
 
-
-def _split_by_block(values: np.ndarray, ev: Evaluation) -> dict[str, np.ndarray]:
-    """Equality multipliers by block name."""
-    out, start = {}, 0
-    for block in ev.equalities:
-        out[block.name] = values[start: start + block.values.size]
-        start += block.values.size
-    return out

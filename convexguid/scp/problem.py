@@ -119,9 +119,10 @@ class ProgramSize:
 class NonconvexProgram(Protocol):
     """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`.
 
-    Optional: ``lagrangian_curvature(x, multipliers) -> ndarray``, a diagonal approximation of
-    :math:`\\sum_i \\lambda_i \\nabla^2 e_i(x)` given the equality multipliers by block name
-    (negative entries are clipped to zero); the engine then adds it to the subproblem's Hessian.
+    Optional: ``lagrangian_hessian(x, weights) -> matrix``, the exact
+    :math:`\\sum \\omega_i \\nabla^2 r_i + \\sum \\mu_j \\nabla^2 g_j + \\sum \\lambda_k \\nabla^2 e_k` for
+    :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``; without it the engine differences the
+    program's Jacobians (:class:`~convexguid.scp.lagrangian.LagrangianHessian`).
     ``A`` and ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``.
     """
 
@@ -155,7 +156,9 @@ class SCPSettings:
     point, see :class:`~convexguid.scp.policies.PenaltyPolicy`). ``max_backend_failures``
     numerical failures of the convex solver in a row are retried with a smaller trust region.
     ``iterative_refinement`` refines the interior-point backend's KKT solves (Clarabel's default);
-    a family turns it off where that is measured to change only the time.
+    a family turns it off where that is measured to change only the time. ``second_order`` puts the
+    Lagrangian's curvature into the subproblem (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance``
+    bounds the relative stationarity and complementarity at convergence (:mod:`convexguid.scp.kkt`).
     """
 
     backend: str = "auto"
@@ -175,6 +178,9 @@ class SCPSettings:
     max_backend_failures: int = 3
     second_order_correction: bool = True
     iterative_refinement: bool = True
+    second_order: bool = True
+    second_order_violation: float = 1e-4
+    kkt_tolerance: float = 1e-6
 
     @classmethod
     def from_spec(cls, solver, **overrides) -> SCPSettings:

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from convexguid.scp.kkt import KKTResiduals
+from convexguid.scp.lagrangian import Multipliers
 from convexguid.scp.problem import Evaluation
 
 
@@ -48,7 +50,11 @@ class IterationState:
     radius: float
     penalty: float
     started: float
-    multipliers: dict[str, np.ndarray] = field(default_factory=dict)
+    multipliers: Multipliers | None = None
+    kkt: KKTResiduals | None = None
+    newton_radius: float = np.inf
+    escapes: int = 0
+    escape_log: list[str] = field(default_factory=list)
     iteration: int = 0
     failures: int = 0
     phase1_runs: int = 0
@@ -83,6 +89,12 @@ class SCPResult:
     solver_time_s: float = 0.0
     solver: str = ""
     """The backend that solved the subproblems, resolved (e.g. ``auto -> daqp (condensed)``)."""
+    kkt: dict | None = None
+    """The KKT residuals at ``x`` (:meth:`~convexguid.scp.kkt.KKTResiduals.summary`), None if never measured."""
+    notes: tuple[str, ...] = ()
+    """What the run did besides its iterations (e.g. a step off a saddle)."""
+    penalty: float | None = None
+    """The penalty weight the run ended with (a warm restart may start from it)."""
 
     @property
     def overhead_time_s(self) -> float:
@@ -100,4 +112,4 @@ def merge_results(first: SCPResult, second: SCPResult) -> SCPResult:
     return replace(second, history=history, iterations=len(history),
                    wall_time_s=first.wall_time_s + second.wall_time_s,
                    convexify_time_s=first.convexify_time_s + second.convexify_time_s,
-                   solver_time_s=first.solver_time_s + second.solver_time_s)
+                   solver_time_s=first.solver_time_s + second.solver_time_s, notes=first.notes + second.notes)

@@ -157,7 +157,8 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
                                  f"the dense check fails after {attempt} repair rounds ({why}): {worst_violations(v)}",
                                  rounds)
         program, what = repair.program, repair.description
-        last = SCPAlgorithm(program, settings, log).run(repair.x0)
+        # warm: the plan and the penalty weight carry over (the repaired program's multipliers are much the same)
+        last = SCPAlgorithm(program, settings, log).run(repair.x0, penalty=result.penalty)
         result = merge_results(result, last)
     raise AssertionError("unreachable: the loop returns on its last round")
 

@@ -56,7 +56,7 @@ import scipy.sparse as sp
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.dynamics.torque import LinearTorque
 from convexguid.geometry import PointingCone, eigenaxis_rotation
-from convexguid.rotations import axis_angle_to_quat, quat_multiply, quat_rate_matrix, skew
+from convexguid.rotations import axis_angle_to_quat, quat_conjugate, quat_multiply, quat_rate_matrix, skew
 from convexguid.scp.problem import (
     ConstraintBlock,
     Evaluation,
@@ -266,11 +266,21 @@ class QuaternionProgram:
 
     @cached_property
     def _linear(self) -> LinearConstraints:
+        """Boundary conditions, and the rate and torque boxes at the nodes.
+
+        The start is the whole state :math:`(q_0, \\omega_0)`. The end is the rate and the attitude error's vector
+        part, :math:`\\operatorname{vec}(q_f^{-1} \\otimes q_K) = 0`: three rows, linear in :math:`q_K`. Fixing all four
+        components of :math:`q_K` would fix its norm as well, which the dynamics already carry from :math:`q_0`
+        (to the transcription's accuracy): one nearly dependent row, whose multiplier grows without bound as the
+        iterates converge.
+        """
         c, n = self.case, self.num_variables
-        A = np.zeros((2 * NX, n))
+        A = np.zeros((2 * NX - 1, n))
         A[np.arange(NX), self._cols(0, slice(0, NX))] = 1.0
-        A[NX + np.arange(NX), self._cols(self.K, slice(0, NX))] = 1.0
-        b = np.concatenate([c.q0, c.w0, c.qf, c.wf])
+        error = np.array([quat_multiply(quat_conjugate(c.qf), e)[:3] for e in np.eye(4)]).T
+        A[NX: NX + 3][:, self._cols(self.K, slice(0, 4))] = error
+        A[NX + 3 + np.arange(3), self._cols(self.K, slice(4, NX))] = 1.0
+        b = np.concatenate([c.q0, c.w0, np.zeros(3), c.wf])
         # the rate and torque boxes, +-1 per row: built sparse (a dense matrix grows as the square of the nodes)
         cols, signs, h = [], [], []
         for k in range(self.num_nodes):

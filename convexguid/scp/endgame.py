@@ -1,0 +1,220 @@
+"""The second-order end game: Newton's step on the constraints the last subproblem found active.
+
+The convex subproblem identifies which constraints hold with equality at the solution (its
+multipliers say which), and it does so long before its first-order model has converged; what it
+cannot do is converge fast, because it carries no curvature of the constraints. Once the iterate is
+nearly feasible, the engine therefore also takes the equality-constrained quadratic step on that
+working set :math:`\\mathcal W` (the EQP step of SLQP methods: Byrd, Gould, Nocedal & Waltz, "An
+algorithm for nonlinear optimization using linear programming and equality constrained
+subproblems", Math. Prog. 100, 2004; Nocedal & Wright, *Numerical Optimization*, 2nd ed.,
+Sec. 18.1 and 18.6):
+
+.. math::
+
+    \\min_d\\; \\nabla f^T d + \\tfrac12 d^T \\nabla^2_{xx} L\\, d
+    \\quad\\text{s.t.}\\quad c_{\\mathcal W} + A_{\\mathcal W} d = 0 ,
+
+solved in the null space of :math:`A_{\\mathcal W}` (Nocedal & Wright eqs. 16.17-16.19), with
+:math:`\\nabla^2_{xx} L` the exact Hessian of the Lagrangian (:mod:`convexguid.scp.lagrangian`).
+Newton's method on the KKT conditions converges quadratically once the working set is right. The
+reduced Hessian :math:`Z^T \\nabla^2 L Z` tells whether the step is a minimizer's: when it is not
+positive definite, no step is proposed and its most negative direction is kept (a stationary point
+with such a direction is a saddle, not a minimum). The engine judges the step with the same merit
+function and ratio test as any other.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+
+from convexguid.scp.lagrangian import CurvatureWeights, LagrangianHessian, Multipliers, WorkingSet
+from convexguid.scp.problem import Evaluation, NonconvexProgram, OutputConstraints
+
+RANK_TOLERANCE = 1e-6
+"""Rows of the working set whose pivots fall below this share of the largest are taken as dependent."""
+
+
+@dataclass(frozen=True)
+class NewtonStep:
+    """The EQP step (scaled variables), the multipliers of the working set, and the reduced Hessian's verdict.
+
+    ``step`` is ``None`` when the reduced Hessian is not positive definite; ``negative_direction`` then holds
+    its eigenvector of the most negative eigenvalue (scaled, unit max-norm, with a deterministic sign).
+    """
+
+    step: np.ndarray | None
+    multipliers: np.ndarray | None
+    smallest_eigenvalue: float
+    negative_direction: np.ndarray | None = None
+    shortened: bool = False
+    """The step was cut short of Newton's (at a bound it would have broken)."""
+
+
+def null_space_split(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(Y, Z, R, pivots)``: orthonormal bases of the range of ``rows.T`` and of the null space of ``rows``.
+
+    From the pivoted QR factorization :math:`A^T P = Q R`; rows whose pivot is below
+    :data:`RANK_TOLERANCE` of the largest are dependent on the others (a quaternion's unit norm, which the
+    dynamics keep, fixed at both ends is one such pair) and left out.
+    """
+    n = rows.shape[1]
+    if rows.shape[0] == 0:
+        return np.zeros((n, 0)), np.eye(n), np.zeros((0, 0)), np.zeros(0, dtype=int)
+    Q, R, pivots = la.qr(rows.T, pivoting=True, mode="full")
+    diag = np.abs(np.diag(R))
+    rank = int(np.sum(diag > RANK_TOLERANCE * max(diag[0], 1e-300))) if diag.size else 0
+    return Q[:, :rank], Q[:, rank:], R[:rank, :rank], pivots[:rank]
+
+
+def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, values: np.ndarray) -> NewtonStep:
+    """The EQP step for gradient ``g``, Hessian ``H``, working-set rows ``A`` and values ``c`` (all scaled).
+
+    Range part :math:`d_Y = -Y (R^T)^{-1} c_P` (the least-norm step onto the linearized working set), null-space
+    part from :math:`Z^T H Z\\, p = -Z^T (g + H d_Y)`, and multipliers from :math:`R\\, y_P = -Y^T (g + H d)` (zero on
+    the dependent rows).
+    """
+    Y, Z, R, pivots = null_space_split(rows)
+    range_step = Y @ la.solve_triangular(R, -values[pivots], trans="T") if pivots.size else np.zeros(gradient.size)
+    reduced = Z.T @ hessian @ Z
+    reduced = 0.5 * (reduced + reduced.T)
+    if reduced.shape[0] == 0:
+        step = range_step
+    else:
+        try:
+            factor = la.cho_factor(reduced, lower=True, check_finite=False)
+        except la.LinAlgError:
+            values_, vectors = la.eigh(reduced, subset_by_index=[0, 0])
+            direction = Z @ vectors[:, 0]
+            direction = direction / np.max(np.abs(direction))
+            direction = direction * np.sign(direction[np.argmax(np.abs(direction))])
+            return NewtonStep(None, None, float(values_[0]), direction)
+        step = range_step + Z @ la.cho_solve(factor, -(Z.T @ (gradient + hessian @ range_step)))
+    multipliers = np.zeros(rows.shape[0])
+    if pivots.size:
+        multipliers[pivots] = la.solve_triangular(R, -(Y.T @ (gradient + hessian @ step)))
+    return NewtonStep(step, multipliers, np.inf)
+
+
+@dataclass(frozen=True)
+class LocalModel:
+    """The second-order model at one iterate, in scaled variables :math:`u = S^{-1} d`.
+
+    ``hessian`` is the whole :math:`S \\nabla^2_{xx} L S` (Gauss-Newton part included), ``gradient``
+    :math:`S \\nabla f`, ``rows`` and ``values`` the working set's :math:`A S` and :math:`c`.
+    """
+
+    hessian: np.ndarray
+    gradient: np.ndarray
+    working: WorkingSet
+    rows: np.ndarray
+    values: np.ndarray
+
+    def newton(self, values: np.ndarray | None = None) -> NewtonStep:
+        """:func:`newton_step` on this model (``values`` replace the working set's, for a second-order correction)."""
+        return newton_step(self.gradient, self.hessian, self.rows, self.values if values is None else values)
+
+    def correction(self, values: np.ndarray) -> np.ndarray:
+        """The least-norm scaled step :math:`-A^+ c` back onto the working set from where its values are ``values``.
+
+        Added to a trial step whose working set's values came out as ``values`` (the curvature the linear
+        model misses), it cancels them to first order: Fletcher's second-order correction in its least-norm
+        form (Nocedal & Wright eq. 18.53), which keeps the step's null-space part.
+        """
+        Y, _, R, pivots = null_space_split(self.rows)
+        if not pivots.size:
+            return np.zeros(self.gradient.size)
+        return Y @ la.solve_triangular(R, -values[pivots], trans="T")
+
+    def quadratic(self, u: np.ndarray) -> float:
+        """:math:`\\nabla f^T d + \\tfrac12 u^T H u`: the objective part of the model."""
+        return float(self.gradient @ u + 0.5 * u @ (self.hessian @ u))
+
+
+class SecondOrderModels:
+    """Builds :class:`LocalModel` s of one program: its Lagrangian Hessian, scales and constant data."""
+
+    def __init__(self, program: NonconvexProgram, first: Evaluation, scale: np.ndarray, weights: np.ndarray,
+                 cost: np.ndarray, outputs: OutputConstraints) -> None:
+        self.hessians = LagrangianHessian(program, first, scale)
+        self.linear = program.linear_constraints()
+        self.scale, self.weights, self.cost, self.outputs = scale, weights, cost, outputs
+
+    def gauss_newton(self, raw: Evaluation) -> np.ndarray:
+        """:math:`2 S J_r^T W J_r S` (scaled, dense)."""
+        n = self.scale.size
+        jac = raw.residual_jacobian
+        if jac is None or raw.residuals.size == 0:
+            return np.zeros((n, n))
+        J = (jac.toarray() if sp.issparse(jac) else np.asarray(jac, dtype=float)) * self.scale
+        return 2.0 * J.T @ (self.weights[:, None] * J)
+
+    def at(self, x: np.ndarray, raw: Evaluation, multipliers: Multipliers, tolerance: float,
+           penalty: float) -> LocalModel:
+        """The model at ``x`` (``raw``: the program's evaluation there, with Jacobians) with ``multipliers`` (those of
+        a subproblem with penalty weight ``penalty``)."""
+        omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs.M)
+        curvature = self.hessians.curvature(x, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
+        hessian = self.gauss_newton(raw) + curvature.multiply(np.outer(self.scale, self.scale)).toarray()
+        gradient = self.cost.astype(float)
+        if raw.residuals.size:
+            gradient = gradient + 2.0 * (raw.residual_jacobian.T @ (self.weights * raw.residuals))
+        working = WorkingSet.at(raw, multipliers, self.linear, self.outputs, x, tolerance, penalty)
+        rows = (working.rows(raw, self.linear, self.outputs) @ sp.diags(self.scale)).toarray()
+        return LocalModel(hessian, gradient * self.scale, working, rows,
+                          working.values(raw, self.linear, self.outputs, x))
+
+    def with_bounds(self, model: LocalModel, raw: Evaluation, x: np.ndarray, added: np.ndarray) -> LocalModel:
+        """``model`` with the hard inequality rows ``added`` (a mask of ``G``'s rows) put into its working set."""
+        working = replace(model.working, linear_inequality=model.working.linear_inequality | added)
+        rows = (working.rows(raw, self.linear, self.outputs) @ sp.diags(self.scale)).toarray()
+        return replace(model, working=working, rows=rows, values=working.values(raw, self.linear, self.outputs, x))
+
+    def onto_equalities(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """The scaled step ``u`` moved (least change) so that ``x + S u`` meets ``A x = b`` exactly.
+
+        The working set drops rows that depend on others to its rank tolerance; a hard boundary condition may be
+        one of them, and no later subproblem may start off it.
+        """
+        A = self.linear.A
+        if not A.shape[0]:
+            return u
+        dense = A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
+        miss = dense @ (x + u * self.scale) - self.linear.b
+        return u - np.linalg.lstsq(dense * self.scale, miss, rcond=None)[0]
+
+    def fraction_to_bounds(self, x: np.ndarray, u: np.ndarray) -> float:
+        """The largest :math:`\\alpha \\le 1` with :math:`G (x + \\alpha S u) \\le h` (``x`` meets them)."""
+        if not self.linear.G.shape[0]:
+            return 1.0
+        room = self.linear.h - self.linear.G @ x
+        rate = self.linear.G @ (u * self.scale)
+        moving = rate > 0
+        return float(min(1.0, np.min(np.maximum(room[moving], 0.0) / rate[moving], initial=1.0)))
+
+    def broken_bounds(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Mask of the hard inequality rows ``G x <= h`` that the scaled step ``u`` from ``x`` breaks."""
+        if not self.linear.G.shape[0]:
+            return np.zeros(0, dtype=bool)
+        gap = self.linear.G @ (x + u * self.scale) - self.linear.h
+        return gap > 1e-9 * (1 + np.abs(self.linear.h))
+
+    def working_values(self, model: LocalModel, raw: Evaluation, x: np.ndarray) -> np.ndarray:
+        """The values of ``model`` 's working set at another point (``raw`` evaluated there)."""
+        return model.working.values(raw, self.linear, self.outputs, x)
+
+
+def linearized_violation(raw: Evaluation, outputs: OutputConstraints, d: np.ndarray) -> float:
+    """The :math:`\\ell_1` violation of the constraints linearized at ``raw`` 's point, after the step ``d``."""
+    total = 0.0
+    if outputs.M.shape[0]:
+        moved = raw.residuals + raw.residual_jacobian @ d
+        total += float(np.maximum(outputs.M @ moved - outputs.m, 0.0).sum())
+    for block in raw.inequalities:
+        total += float(np.maximum(block.values + block.jacobian @ d, 0.0).sum())
+    for block in raw.equalities:
+        total += float(np.abs(block.values + block.jacobian @ d).sum())
+    return total

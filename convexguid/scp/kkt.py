@@ -1,0 +1,90 @@
+"""First-order optimality (KKT) residuals of the nonlinear program, in the problem's own units.
+
+A small step proves nothing: a trust region that has collapsed also takes small steps. The engine
+stops on the Karush-Kuhn-Tucker conditions of
+
+.. math::
+
+    \\min_x f(x) = r^T W r + c^T x \\quad\\text{s.t.}\\quad Ax = b,\\; Gx \\le h,\\; M r(x) \\le m,\\;
+    g(x) \\le 0,\\; e(x) = 0
+
+at the iterate, with the multipliers of the last subproblem (Nocedal & Wright, *Numerical
+Optimization*, 2nd ed., Thm. 12.1, eqs. 12.34):
+
+* stationarity: :math:`\\nabla f + A^T\\lambda_A + G^T\\mu_G + J_r^T M^T \\nu + J_g^T \\mu + J_e^T \\lambda = 0`,
+  measured per variable scale :math:`\\sigma_i` (what the objective would change if the variable moved
+  by its own typical size), in the objective's units;
+* feasibility: the worst violation of any constraint, in that constraint's own unit;
+* complementarity: :math:`\\max_j |\\mu_j g_j(x)|` over every inequality, in the objective's units.
+
+Stationarity and complementarity are judged relative to :math:`\\max(|f(x)|, 10^{-3}|f(x_0)|)`: a
+minimum time is measured in seconds, an energy in its own units, whatever their size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from convexguid.scp.lagrangian import CurvatureWeights, Multipliers, lagrangian_gradient
+from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
+
+
+@dataclass(frozen=True)
+class KKTResiduals:
+    """KKT residuals at one iterate (absolute, in their units) and the objective unit they are judged against."""
+
+    stationarity: float
+    feasibility: float
+    complementarity: float
+    objective_unit: float
+
+    @property
+    def relative_stationarity(self) -> float:
+        return self.stationarity / self.objective_unit
+
+    @property
+    def relative_complementarity(self) -> float:
+        return self.complementarity / self.objective_unit
+
+    def met(self, tolerance: float, feasibility_tolerance: float) -> bool:
+        """Stationarity and complementarity within ``tolerance`` (relative), feasibility within its own."""
+        return (self.relative_stationarity <= tolerance and self.relative_complementarity <= tolerance
+                and self.feasibility <= feasibility_tolerance)
+
+    def summary(self, tolerance: float, feasibility_tolerance: float) -> dict:
+        """The ``kkt`` object of a solution's summary."""
+        return {"stationarity": self.stationarity, "stationarity_relative": self.relative_stationarity,
+                "feasibility": self.feasibility, "complementarity": self.complementarity,
+                "complementarity_relative": self.relative_complementarity, "objective_unit": self.objective_unit,
+                "tolerance": tolerance, "feasibility_tolerance": feasibility_tolerance,
+                "met": self.met(tolerance, feasibility_tolerance)}
+
+
+def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, weights: np.ndarray,
+                  cost: np.ndarray, linear: LinearConstraints, outputs: OutputConstraints, scale: np.ndarray,
+                  objective: float, objective_at_start: float, feasibility: float) -> KKTResiduals:
+    """The KKT residuals of the program at ``x`` (``raw``: its evaluation there, with Jacobians)."""
+    omega = multipliers.residual_weights(raw.residuals, weights, outputs.M)
+    gradient = cost + lagrangian_gradient(raw, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
+    A, G = sp.csr_matrix(linear.A), sp.csr_matrix(linear.G)
+    if A.shape[0]:
+        gradient = gradient + A.T @ multipliers.linear_equality
+    if G.shape[0]:
+        gradient = gradient + G.T @ multipliers.linear_inequality
+    stationarity = float(np.max(np.abs(gradient * scale), initial=0.0))
+    products = [np.zeros(0)]
+    if G.shape[0]:
+        products.append(multipliers.linear_inequality * (G @ x - linear.h))
+    if multipliers.output.size:
+        products.append(multipliers.output * (outputs.M @ raw.residuals - outputs.m))
+    start = 0
+    for block in raw.inequalities:
+        size = block.values.size
+        products.append(multipliers.inequality[start: start + size] * block.values)
+        start += size
+    complementarity = float(np.max(np.abs(np.concatenate(products)), initial=0.0))
+    unit = max(abs(objective), 1e-3 * abs(objective_at_start), 1e-12)
+    return KKTResiduals(stationarity, feasibility, complementarity, unit)
