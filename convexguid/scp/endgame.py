@@ -50,8 +50,6 @@ class NewtonStep:
     multipliers: np.ndarray | None
     smallest_eigenvalue: float
     negative_direction: np.ndarray | None = None
-    shortened: bool = False
-    """The step was cut short of Newton's (at a bound it would have broken)."""
 
 
 def null_space_split(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -152,17 +150,19 @@ class SecondOrderModels:
         J = (jac.toarray() if sp.issparse(jac) else np.asarray(jac, dtype=float)) * self.scale
         return 2.0 * J.T @ (self.weights[:, None] * J)
 
-    def at(self, x: np.ndarray, raw: Evaluation, multipliers: Multipliers, tolerance: float,
-           penalty: float) -> LocalModel:
-        """The model at ``x`` (``raw``: the program's evaluation there, with Jacobians) with ``multipliers`` (those of
-        a subproblem with penalty weight ``penalty``)."""
+    def working_set(self, x: np.ndarray, raw: Evaluation, multipliers: Multipliers, tolerance: float,
+                    penalty: float) -> WorkingSet:
+        """The working set at ``x`` of a subproblem with penalty weight ``penalty`` and these ``multipliers``."""
+        return WorkingSet.at(raw, multipliers, self.linear, self.outputs, x, tolerance, penalty)
+
+    def at(self, x: np.ndarray, raw: Evaluation, multipliers: Multipliers, working: WorkingSet) -> LocalModel:
+        """The model at ``x`` (``raw``: the program's evaluation there, with Jacobians) on ``working``."""
         omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs.M)
         curvature = self.hessians.curvature(x, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
         hessian = self.gauss_newton(raw) + curvature.multiply(np.outer(self.scale, self.scale)).toarray()
         gradient = self.cost.astype(float)
         if raw.residuals.size:
             gradient = gradient + 2.0 * (raw.residual_jacobian.T @ (self.weights * raw.residuals))
-        working = WorkingSet.at(raw, multipliers, self.linear, self.outputs, x, tolerance, penalty)
         rows = (working.rows(raw, self.linear, self.outputs) @ sp.diags(self.scale)).toarray()
         return LocalModel(hessian, gradient * self.scale, working, rows,
                           working.values(raw, self.linear, self.outputs, x))
@@ -185,15 +185,6 @@ class SecondOrderModels:
         dense = A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
         miss = dense @ (x + u * self.scale) - self.linear.b
         return u - np.linalg.lstsq(dense * self.scale, miss, rcond=None)[0]
-
-    def fraction_to_bounds(self, x: np.ndarray, u: np.ndarray) -> float:
-        """The largest :math:`\\alpha \\le 1` with :math:`G (x + \\alpha S u) \\le h` (``x`` meets them)."""
-        if not self.linear.G.shape[0]:
-            return 1.0
-        room = self.linear.h - self.linear.G @ x
-        rate = self.linear.G @ (u * self.scale)
-        moving = rate > 0
-        return float(min(1.0, np.min(np.maximum(room[moving], 0.0) / rate[moving], initial=1.0)))
 
     def broken_bounds(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Mask of the hard inequality rows ``G x <= h`` that the scaled step ``u`` from ``x`` breaks."""

@@ -53,9 +53,10 @@ from convexguid.progress import report
 from convexguid.scp.assembly import SubproblemAssembler
 from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
-from convexguid.scp.endgame import LocalModel, NewtonStep, SecondOrderModels, linearized_violation
+from convexguid.scp.endgame import SecondOrderModels
 from convexguid.scp.kkt import kkt_residuals
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, jacobian_structure
+from convexguid.scp.newton import Candidate, newton_candidate
 from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
@@ -79,9 +80,6 @@ steps. A later stall raises the penalty as usual.
 
 MAX_ESCAPES = 2
 """Steps off a saddle (a stationary point with negative curvature) one run may take."""
-
-PENALTY_OVER_MULTIPLIERS = 10.0
-"""The end game judges Newton's step with a penalty weight at most this many times the largest multiplier."""
 
 NEGATIVE_CURVATURE = 1e-6
 """A reduced-Hessian eigenvalue below minus this share of the Hessian's size is negative curvature."""
@@ -244,10 +242,12 @@ class SCPAlgorithm:
             return self._check_limit(state)
         state.failures = 0
         d = self.assembler.step(result.x)
+        newton = None
         if result.z is not None:
             state.multipliers = self.assembler.multipliers(result.z)
-            if self._newton(state, result, d):
-                return self._check_limit(state)
+            t = time.perf_counter()
+            newton = newton_candidate(self, state, d)
+            state.convexify_time_s += time.perf_counter() - t
         predicted = state.merit - model
         x_new = state.x + d
         raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
@@ -265,6 +265,14 @@ class SCPAlgorithm:
                     x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
                     d = x_new - state.x
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
+        if newton is not None:
+            if newton.ratio < s.accept_ratio:
+                state.newton_radius = 0.25 * newton.step
+            elif (newton.ratio >= self.trust_region.expand or ratio < s.accept_ratio
+                  or newton.merit <= self._merit(ev_new, x_new, newton.penalty)):
+                # the quadratic model predicted its merit well, or it does at least as well as the first-order point
+                self._take_newton(state, newton, result)
+                return self._check_limit(state)
         accepted = ratio >= s.accept_ratio
         if accepted:
             state.x, state.merit = x_new, merit_new
@@ -280,76 +288,6 @@ class SCPAlgorithm:
             self._stalled(state)
         return self._check_limit(state)
 
-    # --- the second-order end game ----------------------------------------------------------------
-    def _newton(self, state: IterationState, result: BackendResult, first_order_step: np.ndarray) -> bool:
-        """Try Newton's step on the working set the subproblem just found (:mod:`convexguid.scp.endgame`).
-
-        Tried once the iterate is within ``second_order_violation`` of feasibility and the first-order step
-        ``first_order_step`` stays inside the trust region (the subproblem then found its working set, not the
-        box's edge), shortened to the trust region, and judged by the ratio test like any step, with a
-        second-order correction when the ratio is poor. The merit's penalty weight is first brought down to
-        :data:`PENALTY_OVER_MULTIPLIERS` times the largest multiplier when it is above that: any weight above
-        the multipliers makes the penalty exact, and a far larger one only magnifies the curvature error of a
-        long step (Nocedal & Wright Sec. 18.3).
-        Returns whether the step was taken (the iteration is then recorded and done).
-        """
-        s = self.settings
-        if self.second_order is None or self.phase1 or max_violation(state.ev) > s.second_order_violation:
-            return False
-        if float(np.max(np.abs(first_order_step) / self.scale, initial=0.0)) >= 0.99 * state.radius:
-            # the first-order step still runs into the trust region: the working set is not settled yet
-            return False
-        t = time.perf_counter()
-        model = self.second_order.at(state.x, state.raw, state.multipliers, s.feasibility_tolerance, state.penalty)
-        model, newton = self._newton_on_bounds(state, model)
-        state.convexify_time_s += time.perf_counter() - t
-        length = 0.0 if newton.step is None else float(np.max(np.abs(newton.step), initial=0.0))
-        if length <= s.tolerance * 1e-3:
-            # no step (the reduced Hessian is not positive definite, or a bound stops it at once)
-            return False
-        radius = min(state.radius, state.newton_radius)
-        full = length <= radius and not newton.shortened
-        if length > radius:
-            # a trust region holds every step: Newton's direction, shortened to its boundary
-            newton = replace(newton, step=newton.step * (radius / length))
-        rho = min(state.penalty, PENALTY_OVER_MULTIPLIERS * state.multipliers.largest())
-        merit = self._merit(state.ev, state.x, rho)
-        predicted = merit - self._model_merit(state, model, newton.step, rho)
-        x_new, ev_new, raw_new = self._trial(state, newton.step)
-        merit_new = self._merit(ev_new, x_new, rho)
-        ratio = _ratio(merit - merit_new, predicted)
-        if ratio < self.correction.threshold:
-            # Maratos: the working set's values at the trial point, cancelled by a least-norm correction
-            corrected = newton.step + model.correction(self.second_order.working_values(model, raw_new, x_new))
-            corrected = self.second_order.onto_equalities(state.x, corrected)
-            if (np.max(np.abs(corrected), initial=0.0) <= 2.0 * state.radius
-                    and not np.any(self.second_order.broken_bounds(state.x, corrected))):
-                x_soc, ev_soc, raw_soc = self._trial(state, corrected)
-                merit_soc = self._merit(ev_soc, x_soc, rho)
-                ratio_soc = _ratio(merit - merit_soc, predicted)
-                if ratio_soc > ratio:
-                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
-        step = float(np.max(np.abs(x_new - state.x) / self.scale, initial=0.0))
-        if ratio < s.accept_ratio:
-            # Newton's own radius: a quarter of the step that failed, until a good step frees it again
-            state.newton_radius = 0.25 * step
-            return False
-        if ratio >= self.trust_region.expand:
-            state.newton_radius = np.inf
-        state.x, state.merit, state.penalty = x_new, merit_new, rho
-        state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
-        state.objective = self._objective(state.ev, state.x)
-        state.multipliers = model.working.multipliers(newton.multipliers, state.multipliers)
-        self._measure_kkt(state)
-        state.radius = self.trust_region.update(state.radius, ratio, step)
-        self._record(state, step, ratio, True, replace(result, status="newton"))
-        if self._kkt_met(state):
-            self._optimal(state, "KKT conditions met")
-        elif full and self._small(state, step, predicted):
-            # only a whole Newton step that is small says the iterates stopped (a cut one may just be short)
-            self._stalled(state)
-        return True
-
     def _small(self, state: IterationState, step: float, predicted: float) -> bool:
         """The step, or the decrease the model predicted for it, is below the tolerance (or the radius collapsed)."""
         # the main loop measures decrease against max(1, |merit|); phase 1's merit is the violation itself,
@@ -358,41 +296,32 @@ class SCPAlgorithm:
         small_decrease = 0 <= predicted <= self.settings.tolerance * unit
         return step <= self.settings.tolerance or small_decrease or self.trust_region.collapsed(state.radius)
 
-    def _newton_on_bounds(self, state: IterationState, model: LocalModel):
-        """Newton's step on the hard equalities and within the hard inequalities.
-
-        The hard inequalities the step breaks join the working set and the step is solved again (twice at most);
-        what it still breaks after that cuts it short, at the first bound it meets.
-        """
-        newton = self._on_equalities(state, model.newton())
-        for _ in range(2):
-            if newton.step is None:
-                return model, newton
-            broken = self.second_order.broken_bounds(state.x, newton.step)
-            if not np.any(broken):
-                return model, newton
-            model = self.second_order.with_bounds(model, state.raw, state.x, broken)
-            newton = self._on_equalities(state, model.newton())
-        if newton.step is not None:
-            fraction = self.second_order.fraction_to_bounds(state.x, newton.step)
-            newton = replace(newton, step=newton.step * fraction, shortened=fraction < 1.0)
-        return model, newton
-
-    def _on_equalities(self, state: IterationState, newton: NewtonStep) -> NewtonStep:
-        if newton.step is None:
-            return newton
-        return replace(newton, step=self.second_order.onto_equalities(state.x, newton.step))
-
-    def _trial(self, state: IterationState, u: np.ndarray) -> tuple[np.ndarray, Evaluation, Evaluation]:
+    def trial(self, state: IterationState, u: np.ndarray) -> tuple[np.ndarray, Evaluation, Evaluation]:
         """``(x, ev, raw)`` at the iterate moved by the scaled step ``u`` (no Jacobians)."""
         x_new = state.x + u * self.scale
         raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
         return x_new, ev_new, raw_new
 
-    def _model_merit(self, state: IterationState, model: LocalModel, u: np.ndarray, rho: float) -> float:
-        """The second-order model of the merit function (penalty weight ``rho``) after the scaled step ``u``."""
-        d = u * self.scale
-        return state.objective + model.quadratic(u) + rho * linearized_violation(state.raw, self.outputs, d)
+    merit = _merit
+    ratio = staticmethod(_ratio)
+    violation = staticmethod(max_violation)
+
+    def _take_newton(self, state: IterationState, newton: Candidate, result: BackendResult) -> None:
+        """Move to Newton's trial point (its penalty weight and working-set multipliers come along)."""
+        if newton.ratio >= self.trust_region.expand:
+            state.newton_radius = np.inf
+        state.x, state.merit, state.penalty = newton.x, newton.merit, newton.penalty
+        state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
+        state.objective = self._objective(state.ev, state.x)
+        state.multipliers = newton.model.working.multipliers(newton.newton.multipliers, state.multipliers)
+        self._measure_kkt(state)
+        state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
+        self._record(state, newton.step, newton.ratio, True, replace(result, status="newton"))
+        if self._kkt_met(state):
+            self._optimal(state, "KKT conditions met")
+        elif newton.whole and self._small(state, newton.step, newton.predicted):
+            # only a whole Newton step that is small says the iterates stopped (a cut one may just be short)
+            self._stalled(state)
 
     # --- optimality ---------------------------------------------------------------------------
     def _measure_kkt(self, state: IterationState) -> None:
@@ -413,8 +342,9 @@ class SCPAlgorithm:
         """A KKT point: converged, unless the reduced Hessian has negative curvature (then step off the saddle)."""
         if self.second_order is not None and not self.phase1 and state.escapes < MAX_ESCAPES \
                 and state.multipliers is not None:
-            model = self.second_order.at(state.x, state.raw, state.multipliers, self.settings.feasibility_tolerance,
-                                        state.penalty)
+            working = self.second_order.working_set(state.x, state.raw, state.multipliers,
+                                                    self.settings.feasibility_tolerance, state.penalty)
+            model = self.second_order.at(state.x, state.raw, state.multipliers, working)
             newton = model.newton()
             size = max(float(np.max(np.abs(model.hessian), initial=0.0)), 1e-12)
             if newton.step is None and newton.smallest_eigenvalue < -NEGATIVE_CURVATURE * size:

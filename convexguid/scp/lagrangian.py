@@ -245,6 +245,16 @@ class WorkingSet:
     inequality: np.ndarray
     equality: np.ndarray
 
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, WorkingSet) and all(
+            np.array_equal(a, b) for a, b in zip(self.masks, other.masks, strict=True))
+
+    __hash__ = None
+
+    @property
+    def masks(self) -> tuple[np.ndarray, ...]:
+        return self.linear_inequality, self.output, self.inequality, self.equality
+
     @classmethod
     def at(cls, ev: Evaluation, multipliers: Multipliers, linear: LinearConstraints, outputs: OutputConstraints,
            x: np.ndarray, tolerance: float, penalty: float) -> WorkingSet:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from convexguid.scp.kkt import KKTResiduals
-from convexguid.scp.lagrangian import Multipliers
+from convexguid.scp.lagrangian import Multipliers, WorkingSet
 from convexguid.scp.problem import Evaluation
 
 
@@ -53,6 +53,7 @@ class IterationState:
     multipliers: Multipliers | None = None
     kkt: KKTResiduals | None = None
     newton_radius: float = np.inf
+    working_set: WorkingSet | None = None
     escapes: int = 0
     escape_log: list[str] = field(default_factory=list)
     iteration: int = 0

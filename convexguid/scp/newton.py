@@ -1,0 +1,129 @@
+"""Newton's candidate step for one SCP iteration: the end game of :mod:`convexguid.scp.endgame`, made safe.
+
+Every iteration solves the convex subproblem first. Once the iterate is within
+``second_order_violation`` of feasibility and that subproblem's step stays inside its trust region
+(it then found its working set, not the box's edge), :func:`newton_candidate` also proposes the
+equality-constrained quadratic step on that working set:
+
+* only once two subproblems in a row agree on the working set (an active set that still changes
+  would make the step, and the Hessian it costs, a waste);
+* on the hard equalities and within the hard inequalities (a bound it breaks joins the working set,
+  twice at most; when one is still broken, the working set is not settled and no step is proposed);
+* inside a trust region of its own (a quarter of a step that failed, freed again by a good one),
+  and the first-order one;
+* judged by the merit function with the penalty weight at most :data:`PENALTY_OVER_MULTIPLIERS`
+  times the largest multiplier: any weight above the multipliers makes the penalty exact, and a
+  far larger one only magnifies the curvature error of a long step (Nocedal & Wright,
+  *Numerical Optimization*, 2nd ed., Sec. 18.3);
+* with a least-norm second-order correction when its ratio is poor (the Maratos effect).
+
+The engine takes it only if its ratio passes and it does at least as well as the first-order step
+on the same merit: the end game can make an iteration better, never worse.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from convexguid.scp.endgame import LocalModel, NewtonStep, linearized_violation
+from convexguid.scp.problem import Evaluation
+
+if TYPE_CHECKING:
+    from convexguid.scp.engine import SCPAlgorithm
+    from convexguid.scp.state import IterationState
+
+PENALTY_OVER_MULTIPLIERS = 10.0
+"""Newton's step is judged with a penalty weight at most this many times the largest multiplier."""
+
+BOUND_ROUNDS = 2
+"""Times the working set may grow by the hard bounds a Newton step breaks before the step is cut short."""
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A trial point: where, its evaluation, its merit (with ``penalty``), and how it was judged."""
+
+    x: np.ndarray
+    ev: Evaluation
+    merit: float
+    penalty: float
+    ratio: float
+    step: float
+    predicted: float
+    whole: bool
+    """Newton's step as solved (not shortened by a trust region or a bound): a small one means convergence."""
+    model: LocalModel | None = None
+    newton: NewtonStep | None = None
+
+
+def newton_candidate(algo: SCPAlgorithm, state: IterationState, first_order_step: np.ndarray) -> Candidate | None:
+    """Newton's trial point at ``state`` (after its subproblem gave ``first_order_step``), or None."""
+    s, models = algo.settings, algo.second_order
+    if models is None or algo.phase1 or state.multipliers is None:
+        return None
+    if algo.violation(state.ev) > s.second_order_violation:
+        return None
+    if float(np.max(np.abs(first_order_step) / algo.scale, initial=0.0)) >= 0.99 * state.radius:
+        return None
+    working = models.working_set(state.x, state.raw, state.multipliers, s.feasibility_tolerance, state.penalty)
+    settled, state.working_set = working == state.working_set, working
+    if not settled:
+        # the subproblems' working set still changes from one iteration to the next: not yet Newton's turn
+        return None
+    model = models.at(state.x, state.raw, state.multipliers, working)
+    model, newton = _within_bounds(algo, state, model)
+    if newton.step is None:
+        # no step: the reduced Hessian is not positive definite, or the working set is not settled (a bound
+        # outside it stops the step)
+        return None
+    length = float(np.max(np.abs(newton.step), initial=0.0))
+    radius = min(state.radius, state.newton_radius)
+    whole = length <= radius
+    if length > radius:
+        newton = replace(newton, step=newton.step * (radius / length))
+    rho = min(state.penalty, PENALTY_OVER_MULTIPLIERS * state.multipliers.largest())
+    merit = algo.merit(state.ev, state.x, rho)
+    d = newton.step * algo.scale
+    predicted = merit - (state.objective + model.quadratic(newton.step)
+                         + rho * linearized_violation(state.raw, algo.outputs, d))
+    x_new, ev_new, raw_new = algo.trial(state, newton.step)
+    merit_new = algo.merit(ev_new, x_new, rho)
+    ratio = algo.ratio(merit - merit_new, predicted)
+    if ratio < algo.correction.threshold:
+        corrected = newton.step + model.correction(models.working_values(model, raw_new, x_new))
+        corrected = models.onto_equalities(state.x, corrected)
+        if (np.max(np.abs(corrected), initial=0.0) <= 2.0 * state.radius
+                and not np.any(models.broken_bounds(state.x, corrected))):
+            x_soc, ev_soc, _ = algo.trial(state, corrected)
+            merit_soc = algo.merit(ev_soc, x_soc, rho)
+            ratio_soc = algo.ratio(merit - merit_soc, predicted)
+            if ratio_soc > ratio:
+                x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
+    step = float(np.max(np.abs(x_new - state.x) / algo.scale, initial=0.0))
+    return Candidate(x_new, ev_new, merit_new, rho, ratio, step, predicted, whole, model, newton)
+
+
+def _within_bounds(algo: SCPAlgorithm, state: IterationState, model: LocalModel) -> tuple[LocalModel, NewtonStep]:
+    """Newton's step on the hard equalities and within the hard inequalities (see the module docstring)."""
+    models = algo.second_order
+    newton = _on_equalities(algo, state, model.newton())
+    for _ in range(BOUND_ROUNDS):
+        if newton.step is None:
+            return model, newton
+        broken = models.broken_bounds(state.x, newton.step)
+        if not np.any(broken):
+            return model, newton
+        model = models.with_bounds(model, state.raw, state.x, broken)
+        newton = _on_equalities(algo, state, model.newton())
+    if newton.step is not None and np.any(models.broken_bounds(state.x, newton.step)):
+        newton = replace(newton, step=None)
+    return model, newton
+
+
+def _on_equalities(algo: SCPAlgorithm, state: IterationState, newton: NewtonStep) -> NewtonStep:
+    if newton.step is None:
+        return newton
+    return replace(newton, step=algo.second_order.onto_equalities(state.x, newton.step))
