@@ -246,7 +246,7 @@ class SCPAlgorithm:
         if result.z is not None:
             state.multipliers = self.assembler.multipliers(result.z)
             t = time.perf_counter()
-            newton = newton_candidate(self, state, d)
+            newton = newton_candidate(self, state)
             state.convexify_time_s += time.perf_counter() - t
         predicted = state.merit - model
         x_new = state.x + d

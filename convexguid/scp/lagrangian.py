@@ -202,14 +202,15 @@ class LagrangianHessian:
 def _colour_groups(pattern: sp.csr_matrix) -> list[tuple[np.ndarray, bool]]:
     """Column groups for differencing the Hessian: ``(columns, alone)``.
 
-    Columns whose row reaches more than :data:`DENSE_COLUMN_FACTOR` times the median row's columns are
-    differenced alone (``alone=True``: their whole column is read off). The others are coloured greedily so that no
-    two columns of a group are within distance two in the pattern's graph without the lone columns:
-    every row then sees at most one column of the group, and its difference belongs to that column.
+    Columns whose row reaches more than :data:`DENSE_COLUMN_FACTOR` times the median row's columns, or half
+    the columns, are differenced alone (``alone=True``: their whole column is read off). The others are
+    coloured greedily so that no two columns of a group are within distance two in the pattern's graph
+    without the lone columns: every row then sees at most one column of the group, and its difference
+    belongs to that column.
     The entries between a lone column and the others are read off the lone column's difference.
     """
     degree = np.diff(pattern.indptr)
-    alone = degree > max(DENSE_COLUMN_FACTOR * float(np.median(degree)), 8)
+    alone = degree > max(min(DENSE_COLUMN_FACTOR * float(np.median(degree)), 0.5 * degree.size), 8)
     groups: list[tuple[np.ndarray, bool]] = [(np.array([j]), True) for j in np.flatnonzero(alone)]
     keep = ~alone
     reduced = pattern[keep][:, keep].tocsr()

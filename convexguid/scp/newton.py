@@ -1,9 +1,8 @@
 """Newton's candidate step for one SCP iteration: the end game of :mod:`convexguid.scp.endgame`, made safe.
 
 Every iteration solves the convex subproblem first. Once the iterate is within
-``second_order_violation`` of feasibility and that subproblem's step stays inside its trust region
-(it then found its working set, not the box's edge), :func:`newton_candidate` also proposes the
-equality-constrained quadratic step on that working set:
+``second_order_violation`` of feasibility, :func:`newton_candidate` also proposes the
+equality-constrained quadratic step on that subproblem's working set:
 
 * only once two subproblems in a row agree on the working set (an active set that still changes
   would make the step, and the Hessian it costs, a waste);
@@ -12,9 +11,10 @@ equality-constrained quadratic step on that working set:
 * inside a trust region of its own (a quarter of a step that failed, freed again by a good one),
   and the first-order one;
 * judged by the merit function with the penalty weight at most :data:`PENALTY_OVER_MULTIPLIERS`
-  times the largest multiplier: any weight above the multipliers makes the penalty exact, and a
-  far larger one only magnifies the curvature error of a long step (Nocedal & Wright,
-  *Numerical Optimization*, 2nd ed., Sec. 18.3);
+  times the largest multiplier, but never below the run's starting weight: any weight above the
+  multipliers makes the penalty exact, and a far larger one (an escalation that has served its
+  purpose) only magnifies the curvature error of a long step (Nocedal & Wright, *Numerical
+  Optimization*, 2nd ed., Sec. 18.3);
 * with a least-norm second-order correction when its ratio is poor (the Maratos effect).
 
 The engine takes it only if its ratio passes and it does at least as well as the first-order step
@@ -59,14 +59,12 @@ class Candidate:
     newton: NewtonStep | None = None
 
 
-def newton_candidate(algo: SCPAlgorithm, state: IterationState, first_order_step: np.ndarray) -> Candidate | None:
-    """Newton's trial point at ``state`` (after its subproblem gave ``first_order_step``), or None."""
+def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | None:
+    """Newton's trial point at ``state`` (whose multipliers are its subproblem's), or None."""
     s, models = algo.settings, algo.second_order
     if models is None or algo.phase1 or state.multipliers is None:
         return None
     if algo.violation(state.ev) > s.second_order_violation:
-        return None
-    if float(np.max(np.abs(first_order_step) / algo.scale, initial=0.0)) >= 0.99 * state.radius:
         return None
     working = models.working_set(state.x, state.raw, state.multipliers, s.feasibility_tolerance, state.penalty)
     settled, state.working_set = working == state.working_set, working
@@ -84,7 +82,8 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState, first_order_step
     whole = length <= radius
     if length > radius:
         newton = replace(newton, step=newton.step * (radius / length))
-    rho = min(state.penalty, PENALTY_OVER_MULTIPLIERS * state.multipliers.largest())
+    floor = algo.penalty.initial(algo.objective_at_start)
+    rho = min(state.penalty, max(PENALTY_OVER_MULTIPLIERS * state.multipliers.largest(), floor))
     merit = algo.merit(state.ev, state.x, rho)
     d = newton.step * algo.scale
     predicted = merit - (state.objective + model.quadratic(newton.step)

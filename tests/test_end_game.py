@@ -1,0 +1,129 @@
+"""The engine's second-order end game, its KKT stop and its saddle check.
+
+* the Lagrangian Hessian by coloured differences equals a column-by-column difference of the same gradient;
+* HS071, whose optimum is no vertex of its linear programs, is reached to 1e-6 with default settings only
+  with the end game (the first-order loop stops 1e-3 away) and its KKT residuals are reported as met;
+* a stationary point with negative curvature (a saddle the first-order loop stops on, by symmetry) is
+  left along that direction, to the true minimum;
+* the Bilimoria & Wie slew (equal inertias, a symmetric problem) lands within 0.5% of the published
+  3.2432 s and on the same answer when the inertia moves by 1e-13 ... 1e-10.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_scp_engine import HS071_X, HS071Epigraph, _SmallProgram
+
+from convexguid.api import solve
+from convexguid.families import get_family
+from convexguid.scp.engine import solve_scp
+from convexguid.scp.lagrangian import CurvatureWeights, LagrangianHessian, lagrangian_gradient
+from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, SCPSettings
+from convexguid.spec import load_problem
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+
+def _program(name: str, overrides: list[str]):
+    spec = load_problem(PROBLEMS / name, overrides)
+    return get_family(spec.family).planning_setup(spec).program
+
+
+@pytest.mark.parametrize("name, overrides", [
+    ("wang_multicone_time.yaml", ["discretization.intervals=10"]),
+    ("wang2003_rendezvous_3d.yaml", ["discretization.subintervals_per_burn=6"]),
+    ("cai2018_flat_attitude.yaml", ["discretization.nodes=8"]),
+], ids=["quaternion", "rendezvous", "flat"])
+def test_coloured_hessian_is_the_columnwise_difference(name, overrides):
+    program = _program(name, overrides)
+    x = program.initial_guess()
+    ev = program.evaluate(x)
+    rng = np.random.default_rng(7)
+    sizes = [sum(b.values.size for b in blocks) for blocks in (ev.inequalities, ev.equalities)]
+    weights = CurvatureWeights(rng.standard_normal(ev.residuals.size), rng.standard_normal(sizes[0]),
+                               rng.standard_normal(sizes[1]))
+    scale = program.variable_scale()
+    hessians = LagrangianHessian(program, ev, scale)
+    if name != "cai2018_flat_attitude.yaml":  # pseudospectral: every node touches every other
+        assert hessians.evaluations < x.size / 2  # the colouring saves evaluations on the sparse ones
+    coloured = hessians.curvature(x, weights).toarray()
+    columns = np.zeros((x.size, x.size))
+    for j in range(x.size):
+        step = np.zeros(x.size)
+        step[j] = 1e-6 * scale[j]
+        columns[:, j] = (lagrangian_gradient(program.evaluate(x + step), weights)
+                         - lagrangian_gradient(program.evaluate(x - step), weights)) / (2 * step[j])
+    columns = 0.5 * (columns + columns.T)
+    scaled = np.outer(scale, scale)
+    size = np.max(np.abs(columns * scaled))
+    assert np.max(np.abs((coloured - columns) * scaled)) <= 1e-5 * size
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "daqp"])
+def test_hs071_end_game_reaches_the_optimum_with_default_settings(backend):
+    first_order = solve_scp(HS071Epigraph(), SCPSettings(backend=backend, second_order=False))
+    newton = solve_scp(HS071Epigraph(), SCPSettings(backend=backend))
+    assert newton.status == "converged" and newton.kkt["met"], newton.message
+    assert np.max(np.abs(newton.x[:4] - HS071_X)) < 1e-6
+    assert np.max(np.abs(first_order.x[:4] - HS071_X)) > 1e-4  # the linear end game stops short
+    assert not first_order.kkt["met"] and "KKT residuals above tolerance" in first_order.message
+    assert newton.iterations < first_order.iterations
+    assert any(r.solver_status == "newton" for r in newton.history)
+
+
+class SymmetricSaddle(_SmallProgram):
+    """min t s.t. 1 - x^2 - t <= 0, |x| <= 2, from (x, t) = (0, 1).
+
+    At x = 0 the constraint's gradient has no x part, so every linear program leaves x where it is: the loop
+    stops at (0, 1), a KKT point (multiplier 1) whose reduced Hessian along x is -2. The minima are x = +-2,
+    t = -3.
+    """
+
+    num_variables = 2
+    num_residuals = 0
+    start = (0.0, 1.0)
+
+    def linear_cost(self) -> np.ndarray:
+        return np.array([0.0, 1.0])
+
+    def linear_constraints(self) -> LinearConstraints:
+        G = np.array([[1.0, 0.0], [-1.0, 0.0]])
+        return LinearConstraints(np.zeros((0, 2)), np.zeros(0), G, np.array([2.0, 2.0]))
+
+    def evaluate(self, z: np.ndarray, jacobians: bool = True) -> Evaluation:
+        x, t = z
+        jac = np.array([[-2.0 * x, -1.0]]) if jacobians else None
+        return Evaluation(np.zeros(0), np.zeros((0, 2)) if jacobians else None,
+                          inequalities=(ConstraintBlock("bowl", np.array([1.0 - x * x - t]), jac),))
+
+
+def test_a_saddle_is_left_along_its_negative_curvature():
+    stuck = solve_scp(SymmetricSaddle(), SCPSettings(backend="clarabel", second_order=False))
+    assert stuck.x[0] == pytest.approx(0.0, abs=1e-9)  # the first-order loop cannot leave the symmetric point
+    result = solve_scp(SymmetricSaddle(), SCPSettings(backend="clarabel"))
+    assert result.status == "converged", result.message
+    assert abs(result.x[0]) == pytest.approx(2.0, abs=1e-7) and result.objective == pytest.approx(-3.0, abs=1e-7)
+    assert "stepped off a saddle" in result.message
+
+
+SLEW_180 = ["spacecraft.torque_max_Nm=1", "keep_out=[]", "spacecraft.rate_max_degps=1000",
+            "boundary.final.axis=[1,0,0]", "boundary.final.angle_deg=180"]
+"""Bilimoria & Wie (1993): |u_i| <= 1 N m, 180 deg rest to rest about a principal axis of a unit-inertia body."""
+
+
+@pytest.mark.parametrize("eps", [0.0, 1e-13, 1e-10])
+def test_bilimoria_wie_slew_is_the_same_under_tiny_inertia_changes(eps):
+    sol = solve(PROBLEMS / "wang_multicone_time.yaml", [*SLEW_180, f"spacecraft.inertia_kgm2=[1,{1 + eps!r},1]"])
+    assert sol.ok, sol.message
+    assert sol.figures.maneuver_time_s == pytest.approx(3.2432, rel=5e-3)
+    # every perturbation lands on one answer: the same local minimum, to the solver's tolerance
+    assert sol.figures.maneuver_time_s == pytest.approx(3.2446028, rel=1e-5)
+    assert sol.summary()["kkt"]["met"]
+
+
+def test_settings_turn_the_end_game_off():
+    assert replace(SCPSettings(), second_order=False).second_order is False
