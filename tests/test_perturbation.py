@@ -1,0 +1,62 @@
+"""Round-off does not choose the answer: problem files solved with every physical input moved by 1e-12 relative
+(:func:`convexguid.spec.perturb.perturb_inputs`, the size of the differences between machines) end with the same
+status, the same objective and a similar number of iterations. The full sweep over every problem file is in the
+robustness benchmark (``python -m convexguid.robustness``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from convexguid.api import solve
+from convexguid.spec.loader import apply_overrides, parse_problem, read_yaml_mapping
+from convexguid.spec.perturb import perturb_inputs
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+RELATIVE = 1e-12
+
+BILIMORIA_WIE = ["spacecraft.torque_max_Nm=1.0", "keep_out=[]", "spacecraft.rate_max_degps=1000.0",
+                 "boundary.final.axis=[1.0,0.0,0.0]", "boundary.final.angle_deg=180.0",
+                 "spacecraft.inertia_kgm2=[1.0,1.0,1.0]"]
+"""Bilimoria & Wie (1993): a unit-inertia body, |u_i| <= 1 N m, 180 deg rest to rest; a symmetric problem whose
+symmetric stationary point is not a minimum."""
+
+CASES = [
+    pytest.param("cai2018_flat_attitude.yaml", [], 1e-6, id="flat-energy"),
+    pytest.param("feng2018_nominal.yaml", [], 1e-6, id="quaternion-energy"),
+    pytest.param("wang2003_rendezvous.yaml", [], 1e-6, id="rendezvous-burn-time"),
+    pytest.param("wang_multicone_time.yaml", BILIMORIA_WIE, 1e-4, id="bilimoria-wie-time"),
+]
+
+
+def _solve(name: str, overrides: list[str], seed: int | None):
+    source = str(PROBLEMS / name)
+    data = apply_overrides(read_yaml_mapping(source, "a problem file"), overrides, source)
+    if seed is not None:
+        data, changed = perturb_inputs(data, RELATIVE, seed)
+        assert changed > 0
+    return solve(parse_problem(data, source))
+
+
+@pytest.mark.parametrize(("name", "overrides", "objective_rel"), CASES)
+def test_tiny_input_changes_give_the_same_answer(name, overrides, objective_rel):
+    nominal = _solve(name, overrides, None)
+    assert nominal.status == "converged", nominal.message
+    for seed in (1, 2):
+        moved = _solve(name, overrides, seed)
+        assert moved.status == nominal.status, moved.message
+        assert moved.objective == pytest.approx(nominal.objective, rel=objective_rel)
+        assert abs(moved.iterations - nominal.iterations) <= max(3, 0.3 * nominal.iterations)
+
+
+def test_perturbation_moves_physical_numbers_only():
+    data = {"name": "x", "solver": {"tolerance": 1e-7}, "spacecraft": {"inertia_kgm2": [1.0, 2.0, 0.0], "n": 3},
+            "boundary": {"tf_s": 10.0}}
+    moved, changed = perturb_inputs(data, 1e-12, 0)
+    assert changed == 3
+    assert moved["solver"] == data["solver"] and moved["spacecraft"]["n"] == 3
+    assert moved["spacecraft"]["inertia_kgm2"][2] == 0.0
+    for before, after in ((2.0, moved["spacecraft"]["inertia_kgm2"][1]), (10.0, moved["boundary"]["tf_s"])):
+        assert after != before and abs(after / before - 1) == pytest.approx(1e-12, rel=1e-3)
+    assert perturb_inputs(data, 1e-12, 0)[0] == moved and data["boundary"]["tf_s"] == 10.0
