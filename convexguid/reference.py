@@ -51,3 +51,34 @@ class ReferenceResult:
 def casadi_available() -> bool:
     """Whether the optional dependency ``casadi`` can be imported."""
     return importlib.util.find_spec("casadi") is not None
+
+
+@dataclass(frozen=True)
+class IndependentOptimum:
+    """The best objective an independent method found for a problem: what a plan's optimality is judged against.
+
+    ``objective`` is None when no start succeeded. ``method`` says what found it (e.g. ``IPOPT, exact Hessian,
+    best of 4 starts``); ``solved`` counts the starts that succeeded; ``infeasible`` is True only when the method
+    proves that no plan exists (a convex relaxation that is infeasible).
+    """
+
+    objective: float | None
+    method: str
+    solved: int = 0
+    starts: int = 1
+    infeasible: bool = False
+
+    def gap(self, objective: float | None) -> float | None:
+        """Relative gap ``(objective - best) / |best|`` (negative: the plan beats the reference); None if either
+        is missing."""
+        if objective is None or self.objective is None:
+            return None
+        return (objective - self.objective) / max(abs(self.objective), 1e-12)
+
+
+def best_of_starts(solve_from, starts: int, method: str) -> IndependentOptimum:
+    """Run ``solve_from(k)`` (a :class:`ReferenceResult`) for ``k = 0 .. starts - 1``; the best successful objective."""
+    results = [solve_from(k) for k in range(starts)]
+    solved = [r.objective for r in results if r.success]
+    return IndependentOptimum(min(solved) if solved else None, f"{method}, best of {starts} starts", len(solved),
+                              starts)

@@ -51,11 +51,11 @@ def test_tiny_input_changes_give_the_same_answer(name, overrides, objective_rel)
 
 
 def test_perturbation_moves_physical_numbers_only():
-    data = {"name": "x", "solver": {"tolerance": 1e-7}, "spacecraft": {"inertia_kgm2": [1.0, 2.0, 0.0], "n": 3},
-            "boundary": {"tf_s": 10.0}}
+    data = {"name": "x", "solver": {"tolerance": 1e-7}, "spacecraft": {"inertia_kgm2": [1.0, 2, 0.0], "runs": 3},
+            "boundary": {"tf_s": 10.0, "flag": True}}
     moved, changed = perturb_inputs(data, 1e-12, 0)
     assert changed == 3
-    assert moved["solver"] == data["solver"] and moved["spacecraft"]["n"] == 3
+    assert moved["solver"] == data["solver"] and moved["spacecraft"]["runs"] == 3 and moved["boundary"]["flag"] is True
     assert moved["spacecraft"]["inertia_kgm2"][2] == 0.0
     for before, after in ((2.0, moved["spacecraft"]["inertia_kgm2"][1]), (10.0, moved["boundary"]["tf_s"])):
         assert after != before and abs(after / before - 1) == pytest.approx(1e-12, rel=1e-3)

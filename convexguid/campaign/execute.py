@@ -124,21 +124,25 @@ OutcomeSink = Callable[[RunTask, dict[str, Any]], None]
 """Receives each task with its outcome, as it arrives."""
 
 
-def run_serial(tasks: Sequence[RunTask], sink: OutcomeSink) -> None:
-    """Run the tasks one after another in this process."""
+def run_serial(tasks: Sequence[RunTask], sink: OutcomeSink, work: Callable[[Any], dict[str, Any]] = run_task
+               ) -> None:
+    """Run the tasks one after another in this process (``work(task)`` gives each outcome)."""
     for task in tasks:
-        sink(task, run_task(task))
+        sink(task, work(task))
 
 
-def run_on_dask(tasks: Sequence[RunTask], sink: OutcomeSink, client: Client) -> None:
+def run_on_dask(tasks: Sequence[RunTask], sink: OutcomeSink, client: Client,
+                work: Callable[[Any], dict[str, Any]] = run_task) -> None:
     """Submit every task to the cluster of ``client``; hand over each outcome as it completes.
 
-    Whatever ends this early (an interrupt, an exception of ``sink``) cancels the tasks still pending.
+    ``work(task)`` computes an outcome on a worker and never raises (:func:`run_task` by default; any task with
+    ``run_id`` and ``figures`` attributes will do). Whatever ends this early (an interrupt, an exception of
+    ``sink``) cancels the tasks still pending.
     """
     from distributed import as_completed
 
     session = uuid.uuid4().hex[:8]
-    futures = {client.submit(run_task, task, key=f"convexguid-run-{task.run_id}-{session}", pure=False): task
+    futures = {client.submit(work, task, key=f"convexguid-run-{task.run_id}-{session}", pure=False): task
                for task in tasks}
     try:
         for future in as_completed(futures, loop=client.loop):

@@ -21,6 +21,7 @@ from convexguid.sizes import DEFAULT_MEMORY_LIMIT_BYTES, SizeEstimate, check_siz
 from convexguid.spec.common import ProblemBase
 
 if TYPE_CHECKING:
+    from convexguid.reference import IndependentOptimum
     from convexguid.scp.engine import IterationRecord
     from convexguid.scp.verified import PlanningSetup
     from convexguid.solution import Figures, Solution
@@ -63,6 +64,13 @@ class Family:
         timings file (:mod:`convexguid.report.timings`, not committed), e.g. LPMPC update times. None: nothing.
     bench : callable or None
         ``bench(problem_path, args) -> int`` (exit code) for ``convexguid bench``; None if the family has none.
+    independent_optimum : callable or None
+        ``independent_optimum(spec, solution, starts) -> IndependentOptimum`` (:mod:`convexguid.reference`): the
+        best objective an independent method reaches on the problem ``solution`` solved (IPOPT on the same NLP from
+        ``starts`` starts, or a convex relaxation that also certifies infeasibility); the robustness benchmark
+        judges plans by it. The solution only supplies inputs the spec leaves to the solve (a final time set as a
+        multiple of the minimum time), never a start.
+        None: the family has no such reference.
     estimate_size : callable or None
         ``estimate_size(spec) -> SizeEstimate`` (:mod:`convexguid.sizes`): the peak memory of a run estimated from
         the spec alone (cheap: no program is built), with the key that drives it. None: no limit.
@@ -82,6 +90,7 @@ class Family:
     report_section: Callable[[ProblemBase, Solution], list[str]] | None = None
     timing_section: Callable[[ProblemBase, Solution], list[str]] | None = None
     bench: Callable[[str | PathLike[str], argparse.Namespace], int] | None = None
+    independent_optimum: Callable[[ProblemBase, Solution, int], IndependentOptimum] | None = None
     estimate_size: Callable[[ProblemBase], SizeEstimate] | None = None
     memory_limit_bytes: float = DEFAULT_MEMORY_LIMIT_BYTES
 

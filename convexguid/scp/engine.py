@@ -79,6 +79,9 @@ steps. A later stall raises the penalty as usual.
 
 
 MAX_ESCAPES = 2
+POLISH_ITERATIONS = 6
+"""A feasible stall whose KKT residuals are above tolerance goes on this many iterations more (the end game's
+working set settles and Newton takes over) before it is reported ``converged`` with the residuals named."""
 """Steps off a saddle (a stationary point with negative curvature) one run may take."""
 
 NEGATIVE_CURVATURE = 1e-6
@@ -388,6 +391,10 @@ class SCPAlgorithm:
             if state.kkt is None:
                 self._measure_kkt(state)
             if state.kkt is not None and not self._kkt_met(state):
+                if (self.second_order is not None and state.polish < POLISH_ITERATIONS
+                        and not self.trust_region.collapsed(state.radius)):
+                    state.polish += 1  # a small first-order step is not yet proof of optimality: go on
+                    return
                 why += (f" (KKT residuals above tolerance {s.kkt_tolerance:g}: stationarity "
                         f"{state.kkt.relative_stationarity:.2g}, complementarity "
                         f"{state.kkt.relative_complementarity:.2g} relative)")

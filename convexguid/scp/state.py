@@ -55,6 +55,7 @@ class IterationState:
     newton_radius: float = np.inf
     working_set: WorkingSet | None = None
     escapes: int = 0
+    polish: int = 0
     escape_log: list[str] = field(default_factory=list)
     iteration: int = 0
     failures: int = 0

@@ -20,5 +20,6 @@ FAMILY = Family(
     verification_method="SciPy DOP853 re-propagation of the plan",
     figures=FlatAttitudeFigures,
     bench=lazy("convexguid.families.flat_attitude.bench:bench_command"),
+    independent_optimum=lazy("convexguid.families.flat_attitude.crosscheck:independent_optimum"),
     estimate_size=estimate_size,
 )

@@ -22,5 +22,6 @@ FAMILY = Family(
     verification_method="SciPy DOP853 re-propagation of the plan",
     figures=QuaternionAttitudeFigures,
     bench=lazy("convexguid.families.quaternion_attitude.bench:bench_command"),
+    independent_optimum=lazy("convexguid.families.quaternion_attitude.crosscheck:independent_optimum"),
     estimate_size=estimate_size,
 )

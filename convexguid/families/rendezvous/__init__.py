@@ -29,5 +29,6 @@ FAMILY = Family(
         ("planned_direction_norm_min", "smallest norm of the interpolated direction on burns (1 at nodes)"),
     ),
     bench=lazy("convexguid.families.rendezvous.bench:bench_command"),
+    independent_optimum=lazy("convexguid.families.rendezvous.crosscheck:independent_optimum"),
     estimate_size=estimate_size,
 )
