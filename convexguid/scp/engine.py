@@ -56,7 +56,7 @@ from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.endgame import SecondOrderModels
 from convexguid.scp.kkt import kkt_residuals
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, jacobian_structure
-from convexguid.scp.newton import Candidate, newton_candidate
+from convexguid.scp.newton import PENALTY_OVER_MULTIPLIERS, Candidate, newton_candidate
 from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
@@ -79,6 +79,8 @@ steps. A later stall raises the penalty as usual.
 
 
 MAX_ESCAPES = 2
+PENALTY_SLACK = 10.0
+"""A weight more than this many times its target is lowered to it (:meth:`SCPAlgorithm._relax_penalty`)."""
 POLISH_ITERATIONS = 6
 """A feasible stall whose KKT residuals are above tolerance goes on this many iterations more (the end game's
 working set settles and Newton takes over) before it is reported ``converged`` with the residuals named."""
@@ -229,6 +231,7 @@ class SCPAlgorithm:
         s = self.settings
         report("SCP phase-1 iteration" if self.phase1 else "SCP iteration", state.iteration + 1)
         state.iteration += 1
+        self._relax_penalty(state)
         hessian = None
         if self.curvature is not None and state.multipliers is not None:
             hessian = np.maximum(self.curvature(state.x, state.multipliers.by_block(state.raw)), 0.0)
@@ -291,6 +294,26 @@ class SCPAlgorithm:
             self._stalled(state)
         return self._check_limit(state)
 
+    def _relax_penalty(self, state: IterationState) -> None:
+        """Near a feasible point, bring a penalty weight far above the multipliers back to
+        :data:`~convexguid.scp.newton.PENALTY_OVER_MULTIPLIERS` times the largest (never below the run's starting
+        weight).
+
+        Any weight above the multipliers keeps the penalty exact; one escalated far beyond them (while the
+        iterates were infeasible) makes the merit function count the removal of round-off-sized violations as
+        the model's main decrease, so steps that slide along curved constraints keep a ratio near 0.5 and the
+        trust region never grows (measured on guo2011_scp_energy: 30 such iterations at a weight 360 times the
+        largest multiplier). A softened row whose violation the subproblem kept has its multiplier at the
+        weight, so a weight that is still needed is never lowered.
+        """
+        if self.phase1 or state.multipliers is None or self.violation(state.ev) > self.settings.second_order_violation:
+            return
+        target = max(PENALTY_OVER_MULTIPLIERS * state.multipliers.largest(),
+                     self.penalty.initial(self.objective_at_start))
+        if state.penalty > PENALTY_SLACK * target:
+            state.penalty = target
+            state.merit = self._merit(state.ev, state.x, target)
+
     def _small(self, state: IterationState, step: float, predicted: float) -> bool:
         """The step, or the decrease the model predicted for it, is below the tolerance (or the radius collapsed)."""
         # the main loop measures decrease against max(1, |merit|); phase 1's merit is the violation itself,
@@ -312,7 +335,9 @@ class SCPAlgorithm:
     def _take_newton(self, state: IterationState, newton: Candidate, result: BackendResult) -> None:
         """Move to Newton's trial point (its penalty weight and working-set multipliers come along)."""
         if newton.ratio >= self.trust_region.expand:
-            state.newton_radius = np.inf
+            # a whole step the model predicted well frees Newton's radius; a cut one doubles it (Alg. 4.1 of
+            # Nocedal & Wright): freed at once, the next full step overshoots where the model no longer holds
+            state.newton_radius = np.inf if newton.whole else 2.0 * state.newton_radius
         state.x, state.merit, state.penalty = newton.x, newton.merit, newton.penalty
         state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
         state.objective = self._objective(state.ev, state.x)

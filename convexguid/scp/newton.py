@@ -8,8 +8,8 @@ equality-constrained quadratic step on that subproblem's working set:
   would make the step, and the Hessian it costs, a waste);
 * on the hard equalities and within the hard inequalities (a bound it breaks joins the working set,
   twice at most; when one is still broken, the working set is not settled and no step is proposed);
-* inside a trust region of its own (a quarter of a step that failed, freed again by a good one),
-  and the first-order one;
+* inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one,
+  freed by a good whole one), and the first-order one;
 * judged by the merit function with the penalty weight at most :data:`PENALTY_OVER_MULTIPLIERS`
   times the largest multiplier, but never below the run's starting weight: any weight above the
   multipliers makes the penalty exact, and a far larger one (an escalation that has served its
