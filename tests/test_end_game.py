@@ -11,7 +11,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -125,5 +124,10 @@ def test_bilimoria_wie_slew_is_the_same_under_tiny_inertia_changes(eps):
     assert sol.summary()["kkt"]["met"]
 
 
-def test_settings_turn_the_end_game_off():
-    assert replace(SCPSettings(), second_order=False).second_order is False
+def test_the_problem_file_turns_the_end_game_off():
+    with_newton = solve(PROBLEMS / "feng2018_nominal.yaml")
+    without = solve(PROBLEMS / "feng2018_nominal.yaml", ["solver.second_order=false", "solver.kkt_tolerance=1e-9"])
+    assert any(r.solver_status == "newton" for r in with_newton.history)
+    assert not any(r.solver_status == "newton" for r in without.history)
+    assert without.summary()["kkt"]["tolerance"] == 1e-9
+    assert without.objective == pytest.approx(with_newton.objective, rel=1e-5)

@@ -186,5 +186,6 @@ class SCPSettings:
     def from_spec(cls, solver, **overrides) -> SCPSettings:
         """Settings from a problem file's ``solver`` section (:class:`convexguid.spec.common.SolverSettings`)."""
         values = {"backend": solver.backend, "max_iterations": solver.max_iterations, "tolerance": solver.tolerance,
-                  "trust_region": solver.trust_region, "penalty": solver.penalty}
+                  "trust_region": solver.trust_region, "penalty": solver.penalty,
+                  "kkt_tolerance": solver.kkt_tolerance, "second_order": solver.second_order}
         return cls(**{**values, **overrides})

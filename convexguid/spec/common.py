@@ -342,7 +342,13 @@ class SolverSettings(SpecModel):
     max_iterations : int
         Maximum number of SCP iterations.
     tolerance : float
-        Stopping tolerance of the SCP loop.
+        Step and predicted-decrease tolerance of the SCP loop (scaled variables; decrease relative to the merit).
+    kkt_tolerance : float
+        Tolerance of the KKT residuals (stationarity and complementarity relative to the objective), the stop that
+        proves optimality (:mod:`convexguid.scp.kkt`).
+    second_order : bool
+        Newton's end game on the subproblems' working set (:mod:`convexguid.scp.newton`); ``false`` leaves the
+        first-order SCP alone.
     trust_region : float
         Initial trust-region radius.
     penalty : float
@@ -354,6 +360,8 @@ class SolverSettings(SpecModel):
     backend: str = "auto"
     max_iterations: Annotated[int, Field(ge=1)] = 50
     tolerance: PositiveFloat = 1e-6
+    kkt_tolerance: PositiveFloat = 1e-6
+    second_order: bool = True
     trust_region: PositiveFloat = 0.5
     penalty: PositiveFloat = 1e3
     verbose: bool = True
