@@ -109,8 +109,9 @@ def test_nlp_dimensions_are_the_papers(paper_case):
     assert (size.num_variables, size.num_equality_constraints, size.num_inequality_constraints) == (159, 135, 3)
 
 
-def test_arcs_jacobians_match_finite_differences(paper_case):
-    program = ArcsProgram(paper_case, 2, 4)
+@pytest.mark.parametrize("coasts", [(False, False), (True, True)], ids=["paper", "lead-and-trail-coasts"])
+def test_arcs_jacobians_match_finite_differences(paper_case, coasts):
+    program = ArcsProgram(paper_case, 2, 4, None, *coasts)
     rng = np.random.default_rng(0)
     x = program.initial_guess() + 0.01 * program.variable_scale() * rng.normal(size=program.num_variables)
     ev = program.evaluate(x)
@@ -226,3 +227,26 @@ def test_cli_summary_json(tmp_path):
     assert summary["family"] == "rendezvous" and summary["method"] == "scp_arcs"
     assert summary["verification"]["passed"] is True
     assert summary["num_equality_constraints"] == 135
+
+
+LATE_END = ["boundary.initial.position_m=[10357.669, -492.569, 851.612]",
+            "boundary.initial.velocity_mps=[-86.7778, -1.6184, -3.2168]"]
+"""A 3-D case whose lcvx optimum ends its second burn at 290 s of 600: the paper's arcs (ending on a burn) cannot
+fly it, and from the boundary conditions alone the SCP stopped 0.21% above it (measured before the lcvx start)."""
+
+
+def test_auto_burns_follow_the_lcvx_optimum_including_a_trailing_coast():
+    sol = solve(SPACE, [*LATE_END, "discretization.burns=auto"])
+    summary = sol.summary()
+    assert sol.ok, sol.message
+    assert summary["num_burns"] == len(summary["lcvx_burn_arcs_s"]) == 2
+    assert summary["burn_arcs_s"][-1][1] < 300.0  # the plan coasts to the target after its last burn
+    assert abs(summary["lcvx_gap_rel"]) <= 1e-4
+    assert summary["kkt"]["met"]
+    assert "above the lcvx optimum" not in sol.message
+
+
+def test_too_few_burns_are_named_against_the_lcvx_optimum():
+    sol = solve(SPACE, ["discretization.burns=1"])
+    assert sol.summary()["lcvx_gap_rel"] > 1e-3
+    assert "above the lcvx optimum on 600 steps" in sol.message and "1 burns where the lcvx optimum has 2" in sol.message

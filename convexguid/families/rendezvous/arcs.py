@@ -14,6 +14,9 @@ Constraints: Hermite-Simpson defects on every burn sub-interval of length
 the coast map :math:`\\Phi(T_{coast}) X_{end} - X_{start} = 0` (eq. 9, closed-form STM),
 :math:`|U_k|^2 = 1` at every node, the boundary states, :math:`\\sum T_i = t_f - t_0` and
 :math:`T_i \\ge 0`. Objective: the total burn time :math:`\\sum T_{burn}` (eq. 10), linear.
+Started from the ``lcvx`` optimum (:meth:`ArcsProgram.following`), the arcs may also open with a coast from
+the initial state or close with one to the final state, where that optimum does (the paper's arcs start and
+end on a burn, which a fixed-time rendezvous whose best burns sit inside the window cannot fly).
 
 The nonconvex parts (the unit thrust direction, the durations multiplying the
 dynamics, the STM of an unknown coast duration) are linearized about the previous
@@ -48,12 +51,19 @@ from convexguid.transcription.hermite_simpson import hermite_simpson_defects
 
 @dataclass(frozen=True)
 class ArcLayout:
-    """Where each node and duration lives in the design vector (``burns`` burns, ``S`` sub-intervals each)."""
+    """Where each node and duration lives in the design vector (``burns`` burns, ``S`` sub-intervals each).
+
+    The arcs run in time order: burn - coast - burn - ... - burn, as in the paper, optionally preceded by a
+    ``lead_coast`` from the initial state and followed by a ``trail_coast`` to the final state (an optimum
+    whose first burn starts late or whose last burn ends early, which the paper's arcs cannot fly).
+    """
 
     nx: int
     nu: int
     burns: int
     subintervals: int
+    lead_coast: bool = False
+    trail_coast: bool = False
 
     @property
     def nodes_per_burn(self) -> int:
@@ -65,7 +75,11 @@ class ArcLayout:
 
     @property
     def num_arcs(self) -> int:
-        return 2 * self.burns - 1
+        return 2 * self.burns - 1 + self.lead_coast + self.trail_coast
+
+    @property
+    def num_coasts(self) -> int:
+        return self.num_arcs - self.burns
 
     @property
     def node_size(self) -> int:
@@ -96,23 +110,37 @@ class ArcLayout:
     def burn_nodes(self, burn: int) -> np.ndarray:
         return burn * self.nodes_per_burn + np.arange(self.nodes_per_burn)
 
-    @staticmethod
-    def burn_arc(burn: int) -> int:
-        return 2 * burn
+    def burn_arc(self, burn: int) -> int:
+        """Index of burn ``burn``'s duration among the arc durations."""
+        return self.lead_coast + 2 * burn
 
-    @staticmethod
-    def coast_arc(coast: int) -> int:
-        return 2 * coast + 1
+    def coast_arc(self, coast: int) -> int:
+        """Index of coast ``coast``'s duration (coasts counted in time order, the lead coast first)."""
+        return 2 * coast if self.lead_coast else 2 * coast + 1
+
+    def coast_ends(self, coast: int) -> tuple[int | None, int | None]:
+        """The nodes a coast leaves and reaches; None for the initial (lead coast) or final (trail coast) state."""
+        before = coast - self.lead_coast  # the burn the coast follows
+        leaves = None if before < 0 else int(self.burn_nodes(before)[-1])
+        reaches = None if before + 1 >= self.burns else int(self.burn_nodes(before + 1)[0])
+        return leaves, reaches
+
+
+END_COAST_FRACTION = 1e-3
+"""A burn of the plan followed (:meth:`ArcsProgram.following`) that starts or ends more than this fraction of the
+maneuver away from its end gets a coast arc there."""
 
 
 class ArcsProgram:
     """:class:`convexguid.scp.problem.NonconvexProgram` of the burn/coast transcription."""
 
-    def __init__(self, case: Rendezvous, burns: int, subintervals: int) -> None:
+    def __init__(self, case: Rendezvous, burns: int, subintervals: int, guess: np.ndarray | None = None,
+                 lead_coast: bool = False, trail_coast: bool = False) -> None:
         self.case = case
-        self.layout = ArcLayout(case.nx, case.nu, burns, subintervals)
+        self.layout = ArcLayout(case.nx, case.nu, burns, subintervals, lead_coast, trail_coast)
         self.num_variables = self.layout.num_variables
         self._A, self._B = case.matrices()
+        self._guess = guess
 
     # --- dynamics f(x, u) = A x + B u on stacked rows -------------------------------------------
     def _f(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -131,11 +159,14 @@ class ArcsProgram:
         return ProgramSize(self.num_variables, nonlinear + lin.A.shape[0], lin.G.shape[0])
 
     def initial_guess(self) -> np.ndarray:
-        """The paper's kind of guess, from the boundary conditions only.
+        """The guess the program was made with (:meth:`following`), else the paper's kind of guess, from the
+        boundary conditions only.
 
         Equal arc durations; states interpolated linearly in time between the boundary
         states; every direction along the velocity change :math:`v_f - v_0`.
         """
+        if self._guess is not None:
+            return self._guess.copy()
         case, lay = self.case, self.layout
         durations = np.full(lay.num_arcs, case.duration / lay.num_arcs)
         times = self.node_times(durations)
@@ -144,6 +175,41 @@ class ArcsProgram:
         dv = case.xf[case.nu:] - case.x0[case.nu:]
         direction = dv / np.linalg.norm(dv) if np.linalg.norm(dv) > 0 else np.eye(case.nu)[0]
         return lay.join(states, np.tile(direction, (lay.num_nodes, 1)), durations)
+
+    def following(self, burns: tuple[BurnArc, ...], thrust: ThrustPlan, states_at) -> ArcsProgram:
+        """A program of as many burns as another plan (the ``lcvx`` optimum), started from its burn structure.
+
+        The burn arcs take the plan's burn durations and the coasts the gaps between them; a first burn that
+        starts later, or a last one that ends earlier, than :data:`END_COAST_FRACTION` of the maneuver from its
+        end gets a lead or trail coast. The nodes take the plan's states at their times (``states_at(times)``,
+        the flown plan) and the direction of its thrust, or of the nearest burn's middle where it is off.
+        """
+        case = self.case
+        slack = END_COAST_FRACTION * case.duration
+        lead, trail = burns[0].start_s - case.t0 > slack, case.tf - burns[-1].end_s > slack
+        lay = ArcLayout(case.nx, case.nu, len(burns), self.layout.subintervals, lead, trail)
+        durations = np.empty(lay.num_arcs)
+        durations[[lay.burn_arc(b) for b in range(lay.burns)]] = [b.duration_s for b in burns]
+        gaps = [max(b.start_s - a.end_s, 0.0) for a, b in zip(burns[:-1], burns[1:], strict=True)]
+        gaps = [burns[0].start_s - case.t0] * lead + gaps + [case.tf - burns[-1].end_s] * trail
+        durations[[lay.coast_arc(c) for c in range(lay.num_coasts)]] = gaps
+        spare = case.duration - durations.sum()  # the ends left without a coast, shared by the coasts
+        if lay.num_coasts:
+            durations[[lay.coast_arc(c) for c in range(lay.num_coasts)]] += spare / lay.num_coasts
+        else:
+            durations[0] += spare
+        program = ArcsProgram(case, lay.burns, lay.subintervals, None, lead, trail)
+        times = program.node_times(durations)
+        middles = np.array([0.5 * (b.start_s + b.end_s) for b in burns])
+        directions = np.empty((times.size, lay.nu))
+        for k, t in enumerate(times):
+            u = thrust(t)
+            if np.linalg.norm(u) < 1e-6:
+                u = thrust(middles[np.argmin(np.abs(middles - t))])
+            norm = np.linalg.norm(u)
+            directions[k] = u / norm if norm > 0 else np.eye(lay.nu)[0]
+        program._guess = lay.join(states_at(times), directions, durations)
+        return program
 
     def variable_scale(self) -> np.ndarray:
         """Position, velocity, direction and duration scales (the trust region is a box in these units)."""
@@ -160,18 +226,21 @@ class ArcsProgram:
     def linear_cost(self) -> np.ndarray:
         """Total burn time, eq. (10)."""
         c = np.zeros(self.num_variables)
-        c[self.layout.duration_offset + 2 * np.arange(self.layout.burns)] = 1.0
+        lay = self.layout
+        c[[lay.duration_offset + lay.burn_arc(b) for b in range(lay.burns)]] = 1.0
         return c
 
     @cached_property
     def _linear(self) -> LinearConstraints:
-        """Boundary states, :math:`\\sum T_i = t_f - t_0`, and :math:`-T_i \\le 0`."""
+        """Boundary states (where no lead or trail coast reaches them), :math:`\\sum T_i = t_f - t_0`, and
+        :math:`-T_i \\le 0`."""
         lay, n = self.layout, self.num_variables
-        A = np.zeros((2 * lay.nx + 1, n))
-        A[np.arange(lay.nx), lay.state_index(0)] = 1.0
-        A[lay.nx + np.arange(lay.nx), lay.state_index(lay.num_nodes - 1)] = 1.0
+        ends = [(0, self.case.x0)] * (not lay.lead_coast) + [(lay.num_nodes - 1, self.case.xf)] * (not lay.trail_coast)
+        A = np.zeros((len(ends) * lay.nx + 1, n))
+        for i, (node, _) in enumerate(ends):
+            A[i * lay.nx + np.arange(lay.nx), lay.state_index(node)] = 1.0
         A[-1, lay.duration_offset:] = 1.0
-        b = np.concatenate([self.case.x0, self.case.xf, [self.case.duration]])
+        b = np.concatenate([*(state for _, state in ends), [self.case.duration]])
         G = np.zeros((lay.num_arcs, n))
         G[np.arange(lay.num_arcs), lay.duration_offset + np.arange(lay.num_arcs)] = -1.0
         return LinearConstraints(A, b, G, np.zeros(lay.num_arcs))
@@ -207,9 +276,10 @@ class ArcsProgram:
                 cols = np.concatenate([node_cols(nodes[k]), node_cols(nodes[k + 1]),
                                        [lay.duration_offset + lay.burn_arc(b)]])
                 burn.append(dense_block((b * S + k) * nx + np.arange(nx), cols))
-        for c in range(lay.burns - 1):
-            cols = np.concatenate([lay.state_index(lay.burn_nodes(c)[-1]), lay.state_index(lay.burn_nodes(c + 1)[0]),
-                                   [lay.duration_offset + lay.coast_arc(c)]])
+        for c in range(lay.num_coasts):
+            leaves, reaches = lay.coast_ends(c)
+            cols = [lay.state_index(node) for node in (leaves, reaches) if node is not None]
+            cols = np.concatenate([*cols, [lay.duration_offset + lay.coast_arc(c)]])
             coast.append(dense_block(c * nx + np.arange(nx), cols))
         for k in range(lay.num_nodes):
             unit.append(dense_block(np.array([k]), lay.direction_index(k)))
@@ -276,18 +346,22 @@ class ArcsProgram:
         return self._block("burn_defects", np.concatenate(values), np.concatenate(data) if jacobians else None)
 
     def _coast_defects(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
-        """Coast arcs, eq. (9): :math:`\\Phi(T_c) X_{end} - X_{start}` with :math:`d\\Phi/dT = A\\Phi`."""
-        lay, n, dim = self.layout, self.case.mean_motion, self.case.dim
+        """Coast arcs, eq. (9): :math:`\\Phi(T_c) X_{end} - X_{start}` with :math:`d\\Phi/dT = A\\Phi` (a lead
+        coast leaves the initial state, a trail coast reaches the final one: fixed, so without columns)."""
+        lay, n, dim, case = self.layout, self.case.mean_motion, self.case.dim, self.case
         states, _, durations = lay.split(x)
         values, data = [np.zeros(0)], [np.zeros(0)]
-        for coast in range(lay.burns - 1):
-            end, start = lay.burn_nodes(coast)[-1], lay.burn_nodes(coast + 1)[0]
+        for coast in range(lay.num_coasts):
+            leaves, reaches = lay.coast_ends(coast)
+            x_leave = case.x0 if leaves is None else states[leaves]
+            x_reach = case.xf if reaches is None else states[reaches]
             tc = durations[lay.coast_arc(coast)]
             phi = cw_stm(n, tc, dim)
-            values.append(phi @ states[end] - states[start])
-            # columns: the state ending the burn, the state starting the next one, the coast duration
-            d_tc = cw_stm_derivative(n, tc, dim) @ states[end]
-            data.append(np.hstack([phi, -np.eye(lay.nx), d_tc[:, None]]).ravel())
+            values.append(phi @ x_leave - x_reach)
+            # columns: the state the coast leaves, the state it reaches (each if free), the coast duration
+            d_tc = cw_stm_derivative(n, tc, dim) @ x_leave
+            parts = [phi] * (leaves is not None) + [-np.eye(lay.nx)] * (reaches is not None) + [d_tc[:, None]]
+            data.append(np.hstack(parts).ravel())
         return self._block("coast_defects", np.concatenate(values), np.concatenate(data) if jacobians else None)
 
     def _unit_directions(self, x: np.ndarray, jacobians: bool) -> ConstraintBlock:
@@ -331,7 +405,8 @@ class ArcsProgram:
         Arc durations are kept; states and directions are interpolated linearly in time inside
         each burn (directions renormalised).
         """
-        finer = ArcsProgram(self.case, self.layout.burns, subintervals)
+        finer = ArcsProgram(self.case, self.layout.burns, subintervals, None, self.layout.lead_coast,
+                            self.layout.trail_coast)
         lay, new = self.layout, finer.layout
         states, dirs, durations = lay.split(x)
         old_s = np.linspace(0.0, 1.0, lay.nodes_per_burn)

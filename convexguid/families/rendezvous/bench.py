@@ -41,6 +41,7 @@ from convexguid.families.rendezvous.case import Rendezvous, RendezvousPlan, buil
 from convexguid.families.rendezvous.lcvx import solve_lcvx
 from convexguid.families.rendezvous.lcvx_reference import solve_lcvx_cvxpy
 from convexguid.families.rendezvous.reference import solve_rendezvous_arcs_ipopt
+from convexguid.families.rendezvous.solve import planning_setup
 from convexguid.reference import casadi_available
 from convexguid.scp.engine import solve_scp
 from convexguid.scp.problem import SCPSettings
@@ -177,7 +178,8 @@ def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
         raise ValueError(f"{problem_path}: family {spec.family!r}, expected 'rendezvous'")
     case = build_case(spec)
     disc, s = spec.discretization, spec.solver
-    program = ArcsProgram(case, disc.burns, disc.subintervals_per_burn)
+    burns = planning_setup(spec).program.layout.burns if disc.auto_burns else disc.burns
+    program = ArcsProgram(case, burns, disc.subintervals_per_burn)  # both from the paper's kind of guess
     settings = SCPSettings.from_spec(s)
     rows = [_lcvx_row(case, disc.grid_steps, s.backend, repeat), _lcvx_cvxpy_row(case, disc.grid_steps, repeat),
             _scp_row(program, settings, repeat)]

@@ -172,7 +172,11 @@ def solve_rendezvous_arcs_ipopt(program: ArcsProgram, x0: np.ndarray | None = No
     ------
     ModuleNotFoundError
         If ``casadi`` is not installed (``pip install convexguid[bench]``).
+    NotImplementedError
+        If the layout has a lead or trail coast (the reference writes the paper's arcs only).
     """
+    if program.layout.lead_coast or program.layout.trail_coast:
+        raise NotImplementedError("the IPOPT reference writes the paper's burn - coast - burn arcs only")
     import casadi as ca
 
     start = time.perf_counter()

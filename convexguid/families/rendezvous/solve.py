@@ -29,37 +29,53 @@ from convexguid.scp.state import IterationRecord
 from convexguid.scp.verified import Check, PlanningSetup, Repair
 from convexguid.solution import Solution, Trajectory, make_solution
 
+DEFAULT_BURNS = 2
+"""Burns of ``burns: auto`` when ``lcvx`` has none to give (it failed): the paper's burn - coast - burn."""
+GAP_TOLERANCE = 1e-3
+"""An ``scp_arcs`` plan more than this far (relative) above the ``lcvx`` optimum says so in its message."""
+
 
 def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
-    """Plan with ``spec.method``, verify by propagation, and (``scp_arcs``) certify against ``lcvx``."""
+    """Plan with ``spec.method``, verify by propagation, and (``scp_arcs``) certify against ``lcvx``.
+
+    ``scp_arcs`` with the ``lcvx`` solution at hand (``certify``, or ``burns: auto``) starts from its burn
+    structure when the numbers of burns agree (:meth:`ArcsProgram.following`): the convex optimum on the grid
+    is global, so the arcs then polish it instead of searching from the boundary conditions alone.
+    """
     start = time.perf_counter()
     case = build_case(spec)
     disc = spec.discretization
     lcvx = solve_lcvx(case, disc.grid_steps, spec.solver.backend) if (
-        spec.method == "lcvx" or spec.certify) else None
-    rounds = []
+        spec.method == "lcvx" or spec.certify or disc.auto_burns) else None
+    rounds, kkt = [], None
     if spec.method == "lcvx":
         plan = lcvx
     elif lcvx is not None and lcvx.status == "infeasible":
         # the convex relaxation admits every thrust history the arcs could fly: no need to search
         plan = replace(lcvx, message=f"certified by lcvx on {disc.grid_steps} steps: {lcvx.message}",
-                       size=_arcs_program(case, spec).size(), iterations=0)
+                       size=planning_setup(spec, lcvx).program.size(), iterations=0)
     else:
-        plan, rounds = _solve_arcs(case, spec, log)
+        plan, rounds, kkt = _solve_arcs(case, spec, lcvx, log)
     track = propagate_thrust(case, plan.thrust, spec.verification.grid_points, spec.verification.rtol,
                              spec.verification.atol)
     verification = verify_track(case, track, spec.verification) if plan.status in ("converged", "unverified") \
         else None
     certificate = _certificate(plan, lcvx) if spec.method == "scp_arcs" and lcvx is not None else None
+    message = plan.message
+    if certificate is not None and certificate.lcvx_gap_rel is not None and certificate.lcvx_gap_rel > GAP_TOLERANCE:
+        why = (f"{len(plan.burns)} burns where the lcvx optimum has {len(lcvx.burns)}"
+               if len(plan.burns) != len(lcvx.burns) else "a local minimum of the arcs")
+        message += (f"; {certificate.lcvx_gap_rel:.2%} above the lcvx optimum on {disc.grid_steps} steps "
+                    f"({certificate.lcvx_burn_time_s:.6g} s): {why}")
     figures = RendezvousFigures(
         burn_time_s=plan.objective if plan.status == "converged" else None, num_burns=len(plan.burns),
         burn_arcs_s=_arcs(plan.burns), accel_mps2=case.accel, mean_motion_radps=case.mean_motion,
         **_field_values(plan.figures), **(_field_values(certificate) if certificate is not None else {}))
     return make_solution(
-        spec, status=plan.status, message=plan.message, started=start, objective=plan.objective,
+        spec, status=plan.status, message=message, started=start, objective=plan.objective,
         iterations=plan.iterations, size=plan.size, verification=verification, history=plan.history,
         nodes=plan.nodes, dense=Trajectory(track.t, state_columns(case.dim, track.states, track.u, case.accel)),
-        figures=figures, timing=plan.timing, repair_rounds=rounds, solver=plan.solver or None)
+        figures=figures, timing=plan.timing, repair_rounds=rounds, solver=plan.solver or None, kkt=kkt)
 
 
 def _arcs(burns: tuple[BurnArc, ...]) -> tuple[tuple[float, float], ...]:
@@ -105,19 +121,30 @@ class ArcsChecker:
                                  f"(final-state error {excess:.3g} x tolerance)")
 
 
-def _arcs_program(case: Rendezvous, spec):
-    return ArcsProgram(case, spec.discretization.burns, spec.discretization.subintervals_per_burn)
+def planning_setup(spec, lcvx: RendezvousPlan | None = None) -> PlanningSetup:
+    """The ``scp_arcs`` program of the spec, its SCP settings and the family's checker.
 
-
-def planning_setup(spec) -> PlanningSetup:
-    """The ``scp_arcs`` program of the spec, its SCP settings and the family's checker."""
+    With the ``lcvx`` plan (solved here when ``burns: auto`` needs it and none is given), ``auto`` takes its
+    number of burns (2 if it has none to give) and the program starts from its burn structure when the
+    numbers agree.
+    """
     case = build_case(spec)
-    return PlanningSetup(_arcs_program(case, spec), SCPSettings.from_spec(spec.solver),
-                         ArcsChecker(case, spec.verification))
+    disc = spec.discretization
+    if lcvx is None and disc.auto_burns:
+        lcvx = solve_lcvx(case, disc.grid_steps, spec.solver.backend)
+    usable = lcvx is not None and lcvx.status == "converged" and lcvx.burns
+    burns = (len(lcvx.burns) if usable else DEFAULT_BURNS) if disc.auto_burns else disc.burns
+    program = ArcsProgram(case, burns, disc.subintervals_per_burn)
+    if usable and len(lcvx.burns) == burns:
+        flown = propagate_thrust(case, lcvx.thrust, spec.verification.grid_points, spec.verification.rtol,
+                                 spec.verification.atol)
+        program = program.following(lcvx.burns, lcvx.thrust, lambda times: np.column_stack(
+            [np.interp(times, flown.t, column) for column in flown.states.T]))
+    return PlanningSetup(program, SCPSettings.from_spec(spec.solver), ArcsChecker(case, spec.verification))
 
 
-def _solve_arcs(case: Rendezvous, spec, log) -> tuple[RendezvousPlan, list]:
-    outcome = planning_setup(spec).solve(log)
+def _solve_arcs(case: Rendezvous, spec, lcvx: RendezvousPlan | None, log) -> tuple[RendezvousPlan, list, object]:
+    outcome = planning_setup(spec, lcvx).solve(log)
     program, result = outcome.program, outcome.result
     states, dirs, durations = program.layout.split(result.x)
     times = program.node_times(durations)
@@ -129,7 +156,7 @@ def _solve_arcs(case: Rendezvous, spec, log) -> tuple[RendezvousPlan, list]:
     plan = RendezvousPlan(outcome.status, outcome.message, result.objective, result.iterations, program.size(),
                           burns, program.thrust_plan(result.x), nodes, result.timing(), figures, result.history,
                           result.solver)
-    return plan, outcome.rounds
+    return plan, outcome.rounds, result.kkt
 
 
 def _interpolated_norm_min(times: np.ndarray, dirs: np.ndarray, burns: tuple[BurnArc, ...]) -> float:

@@ -18,7 +18,7 @@ from collections import Counter
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, PlainValidator, model_validator
+from pydantic import Field, PlainValidator, field_validator, model_validator
 
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
 from convexguid.spec.common import (
@@ -108,20 +108,43 @@ class Thruster(SpecModel):
     accel_mps2: PositiveFloat
 
 
+MAX_BURNS = 20
+"""The most burn arcs ``scp_arcs`` plans (``discretization.burns``)."""
+
+
 class RendezvousDiscretization(SpecModel):
     """Discretisation of both methods.
 
     Attributes
     ----------
-    burns : int
-        ``scp_arcs``: number of burn arcs, separated by coast arcs (2: burn - coast - burn).
+    burns : int or "auto"
+        ``scp_arcs``: number of burn arcs, separated by coast arcs (2: burn - coast - burn); ``auto`` takes the
+        number of burns of the ``lcvx`` optimum (which is then solved whatever ``certify`` says).
     subintervals_per_burn : int
         ``scp_arcs``: equal Hermite-Simpson sub-intervals of each burn (12 in the paper).
     grid_steps : int
         ``lcvx``: zero-order-hold steps over the maneuver (also the certificate of ``scp_arcs``).
     """
 
-    burns: Annotated[int, Field(ge=1, le=20)] = 2
+    burns: int | Literal["auto"] = 2
+
+    @field_validator("burns", mode="before")
+    @classmethod
+    def _burn_count(cls, value: object) -> object:
+        whole = isinstance(value, int) and not isinstance(value, bool)
+        if value == "auto" or (whole and 1 <= value <= MAX_BURNS):
+            return value
+        raise spec_error(f"not a number of burns from 1 to {MAX_BURNS}, nor auto",
+                         "give e.g. 2 (burn - coast - burn), or auto for the lcvx optimum's count", value=value)
+
+    @property
+    def auto_burns(self) -> bool:
+        return self.burns == "auto"
+
+    @property
+    def burns_at_most(self) -> int:
+        """The number of burns, or the most ``auto`` can give (:data:`MAX_BURNS`): for size estimates."""
+        return MAX_BURNS if self.auto_burns else self.burns
     subintervals_per_burn: Annotated[int, Field(ge=1, le=500)] = 12
     grid_steps: Annotated[int, Field(ge=2, le=100000)] = 600
 
@@ -180,8 +203,8 @@ BYTES_PER_SUBINTERVAL = (36_000, 10)
 def estimate_size(spec: RendezvousProblem) -> SizeEstimate:
     """Peak memory of a solve: the ``lcvx`` grid (also ``scp_arcs``'s certificate) and the ``scp_arcs`` arcs."""
     d = spec.discretization
-    grid = BYTES_PER_GRID_STEP * d.grid_steps if spec.method == "lcvx" or spec.certify else 0
-    s = d.burns * d.subintervals_per_burn if spec.method == "scp_arcs" else 0
+    grid = BYTES_PER_GRID_STEP * d.grid_steps if spec.method == "lcvx" or spec.certify or d.auto_burns else 0
+    s = d.burns_at_most * d.subintervals_per_burn if spec.method == "scp_arcs" else 0
     arcs = BYTES_PER_SUBINTERVAL[0] * s + BYTES_PER_SUBINTERVAL[1] * s**2
     key, value = (("discretization.grid_steps", d.grid_steps) if grid >= arcs
                   else ("discretization.subintervals_per_burn", d.subintervals_per_burn))
