@@ -109,14 +109,14 @@ def test_a_saddle_is_left_along_its_negative_curvature():
     assert "stepped off a saddle" in result.message
 
 
-SLEW_180 = ["spacecraft.torque_max_Nm=1", "keep_out=[]", "spacecraft.rate_max_degps=1000",
-            "boundary.final.axis=[1,0,0]", "boundary.final.angle_deg=180"]
+SLEW_180 = ["spacecraft.torque_max_Nm=1", "keep_out=[]", "boundary.final.axis=[1,0,0]", "boundary.final.angle_deg=180"]
 """Bilimoria & Wie (1993): |u_i| <= 1 N m, 180 deg rest to rest about a principal axis of a unit-inertia body."""
 
 
 @pytest.mark.parametrize("eps", [0.0, 1e-13, 1e-10])
 def test_bilimoria_wie_slew_is_the_same_under_tiny_inertia_changes(eps):
-    sol = solve(PROBLEMS / "wang_multicone_time.yaml", [*SLEW_180, f"spacecraft.inertia_kgm2=[1,{1 + eps!r},1]"])
+    sol = solve(PROBLEMS / "wang_multicone_time.yaml", [*SLEW_180, "spacecraft.rate_max_degps=1000",
+                                                        f"spacecraft.inertia_kgm2=[1,{1 + eps!r},1]"])
     assert sol.ok, sol.message
     assert sol.figures.maneuver_time_s == pytest.approx(3.2432, rel=5e-3)
     # every perturbation lands on one answer: the same local minimum, to the solver's tolerance
@@ -131,3 +131,21 @@ def test_the_problem_file_turns_the_end_game_off():
     assert not any(r.solver_status == "newton" for r in without.history)
     assert without.summary()["kkt"]["tolerance"] == 1e-9
     assert without.objective == pytest.approx(with_newton.objective, rel=1e-5)
+
+
+@pytest.mark.parametrize("rate_max", ["null", "1000", "100000"])
+def test_a_generous_or_absent_rate_bound_gives_the_same_slew(rate_max):
+    """The rates are scaled by the slew's own eigenaxis rate, not by the bound: no bound, 1e3 and 1e5 deg/s agree."""
+    overrides = [*SLEW_180, "spacecraft.inertia_kgm2=[1,1,1]", f"spacecraft.rate_max_degps={rate_max}"]
+    sol = solve(PROBLEMS / "wang_multicone_time.yaml", overrides)
+    assert sol.ok, sol.message
+    assert sol.figures.maneuver_time_s == pytest.approx(3.2446028, rel=1e-5)
+    assert ("rate_degps" in {c.name for c in sol.verification.checks}) == (rate_max != "null")
+
+
+def test_betts_asymmetric_slew_reaches_the_published_minimum_time():
+    """Betts (2010, p. 299): 28.6304 s; 50 Hermite-Simpson intervals, no rate bound, from the eigenaxis guess."""
+    sol = solve(PROBLEMS / "betts_asymmetric_slew.yaml")
+    assert sol.ok, sol.message
+    assert sol.figures.maneuver_time_s == pytest.approx(28.6304, rel=5e-4)
+    assert sol.summary()["kkt"]["met"]

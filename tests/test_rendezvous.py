@@ -249,4 +249,5 @@ def test_auto_burns_follow_the_lcvx_optimum_including_a_trailing_coast():
 def test_too_few_burns_are_named_against_the_lcvx_optimum():
     sol = solve(SPACE, ["discretization.burns=1"])
     assert sol.summary()["lcvx_gap_rel"] > 1e-3
-    assert "above the lcvx optimum on 600 steps" in sol.message and "1 burns where the lcvx optimum has 2" in sol.message
+    assert "above the lcvx optimum on 600 steps" in sol.message
+    assert "1 burns where the lcvx optimum has 2" in sol.message

@@ -46,7 +46,8 @@ for every node :math:`k`, the rate box, the cones and the forbidden attitudes al
 (angles clipped to :math:`[0, \\pi]`).
 :math:`C_{BI}(q)` is the unnormalised quadratic form, exactly as in the SCP transcription (no
 unit-norm constraint: the kinematics conserve :math:`|q|`). IPOPT works on scaled variables
-(quaternions as they are, rates divided by :math:`\\omega_{max}`, torques by their axis bounds
+(quaternions as they are, rates divided by the slew's natural rate (:func:`natural_rate`, as the SCP),
+torques by their axis bounds
 :math:`u_{max,i}`, :math:`t_f` by its guess) and on defect rows divided by the same state scales; the
 objective is :math:`t_f / t_f^{guess}` or the energy divided by :math:`\\max_i u_{max,i}^2\\, t_f`.
 Boundary states, rate and torque boxes and the lower bound on :math:`t_f` are variable bounds.
@@ -71,7 +72,7 @@ from typing import Any
 
 import numpy as np
 
-from convexguid.families.quaternion_attitude.program import NODE, NX, AttitudeCase
+from convexguid.families.quaternion_attitude.program import NODE, NX, AttitudeCase, natural_rate
 from convexguid.reference import ReferenceResult
 
 __all__ = ["solve_quaternion_attitude_ipopt"]
@@ -152,7 +153,8 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
         raise ValueError(f"guess must be ({n1}, {NODE}) node rows, got {guess.shape}")
     free_time = case.tf is None
     n = n1 * NODE + (1 if free_time else 0)
-    node_scale = np.concatenate([np.ones(4), np.full(3, case.rate_max), case.torque_max])
+    rate_scale = natural_rate(case, tf_guess)
+    node_scale = np.concatenate([np.ones(4), np.full(3, rate_scale), case.torque_max])
     energy_unit = float(np.max(case.torque_max))**2 * float(case.tf) if not free_time else 1.0
     scale = np.concatenate([np.tile(node_scale, n1), [tf_guess] if free_time else []])
 
@@ -167,8 +169,9 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
     state_scale = ca.DM(node_scale[:NX])
     intervals = [defect(X[:, k], U[:, k], X[:, k + 1], U[:, k + 1], h) for k in range(K)]
     midpoints = ca.horzcat(*[xc for _, xc in intervals])
-    groups = [(ca.vertcat(*[zeta / state_scale for zeta, _ in intervals]), 0.0, 0.0),
-              (ca.vec(midpoints[4:, :]) / case.rate_max, -1.0, 1.0)]
+    groups = [(ca.vertcat(*[zeta / state_scale for zeta, _ in intervals]), 0.0, 0.0)]
+    if case.rate_max is not None:
+        groups.append((ca.vec(midpoints[4:, :]) / case.rate_max, -1.0, 1.0))
     path_q = ca.horzcat(X[:4, :], midpoints[:4, :])  # cones at the nodes and at the interval midpoints
     for cone in case.cones:
         cosine = ca.vertcat(*[_cone_cosine(ca, path_q[:, k], cone.body_axis, cone.inertial_dir)
@@ -193,7 +196,8 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
 
     # Variable bounds (scaled): rate and torque boxes, fixed boundary states, t_f > 0.
     lbz, ubz = np.full(n, -np.inf), np.full(n, np.inf)
-    box = np.concatenate([np.full(4, np.inf), np.ones(6)])
+    rate_box = np.inf if case.rate_max is None else case.rate_max / rate_scale
+    box = np.concatenate([np.full(4, np.inf), np.full(3, rate_box), np.ones(3)])
     lbz[: n1 * NODE], ubz[: n1 * NODE] = np.tile(-box, n1), np.tile(box, n1)
     for k, state in ((0, np.concatenate([case.q0, case.w0])), (K, np.concatenate([case.qf, case.wf]))):
         lbz[k * NODE: k * NODE + NX] = ubz[k * NODE: k * NODE + NX] = state / node_scale[:NX]

@@ -10,6 +10,7 @@ again from the current plan, at most :data:`MAX_TIGHTENINGS` times.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -52,7 +53,8 @@ def build_case(spec) -> AttitudeCase:
         qf = -qf
     cones = tuple(c.pointing_cone() for c in (*spec.keep_out, *spec.keep_in))
     forbidden = tuple(Forbidden(f.name, np.array(f.quaternion), np.radians(f.min_angle_deg)) for f in spec.forbidden)
-    return AttitudeCase(spec.name, sc.inertia_matrix, sc.torque_max_vector, np.radians(sc.rate_max_degps), b.t0_s, q0,
+    rate_max = None if sc.rate_max_degps is None else float(np.radians(sc.rate_max_degps))
+    return AttitudeCase(spec.name, sc.inertia_matrix, sc.torque_max_vector, rate_max, b.t0_s, q0,
                         np.array(b.initial.rate_radps), qf, np.array(b.final.rate_radps), cones, forbidden, b.tf_s)
 
 
@@ -66,7 +68,7 @@ def path_transfer_problem(case: AttitudeCase) -> PathTransferProblem:
     return PathTransferProblem(case.inertia, boresight, case.q0, case.qf,
                                tuple(PointingCone(c.name, c.body_axis, c.inertial_dir, c.half_angle_rad)
                                      for c in keep_out),  # re-normalised, as the planner always did
-                               float(np.min(case.torque_max)), case.rate_max)
+                               float(np.min(case.torque_max)), case.rate_max if case.rate_max is not None else math.inf)
 
 
 def verify_plan(case: AttitudeCase, t_end: float, torque: TorqueCommand | Callable[[float], np.ndarray], settings,

@@ -119,12 +119,14 @@ class AttitudeSpacecraft(SpecModel):
     """Rigid body with per-axis torque and rate boxes.
 
     ``torque_max_Nm`` is one positive number (the same bound on every body axis) or a list of 3 (x, y, z),
-    :math:`|u_i| \\le u_{max,i}`; ``rate_max_degps`` bounds every body-rate component.
+    :math:`|u_i| \\le u_{max,i}`; ``rate_max_degps`` bounds every body-rate component. Omit it (or write
+    ``null``) for no rate bound: the rates are scaled by the slew's own eigenaxis rate, not by the bound, so a
+    generous bound and none give the same plan.
     """
 
     inertia_kgm2: InertiaMatrix
     torque_max_Nm: TorqueBox
-    rate_max_degps: PositiveFloat
+    rate_max_degps: PositiveFloat | None = None
 
     @property
     def inertia_matrix(self) -> np.ndarray:
