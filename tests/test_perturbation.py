@@ -23,10 +23,12 @@ BILIMORIA_WIE = ["spacecraft.torque_max_Nm=1.0", "keep_out=[]", "spacecraft.rate
 symmetric stationary point is not a minimum."""
 
 CASES = [
-    pytest.param("cai2018_flat_attitude.yaml", [], 1e-6, id="flat-energy"),
-    pytest.param("feng2018_nominal.yaml", [], 1e-6, id="quaternion-energy"),
-    pytest.param("wang2003_rendezvous.yaml", [], 1e-6, id="rendezvous-burn-time"),
-    pytest.param("wang_multicone_time.yaml", BILIMORIA_WIE, 1e-4, id="bilimoria-wie-time"),
+    pytest.param("cai2018_flat_attitude.yaml", [], 1e-6, True, id="flat-energy"),
+    pytest.param("feng2018_nominal.yaml", [], 1e-6, True, id="quaternion-energy"),
+    pytest.param("wang2003_rendezvous.yaml", [], 1e-6, True, id="rendezvous-burn-time"),
+    # the exactly symmetric slew reaches its saddle and steps off it along the negative curvature; a perturbed
+    # one drifts off it on its own, somewhere else: the same answer by another path (measured 23 vs 39 iterations)
+    pytest.param("wang_multicone_time.yaml", BILIMORIA_WIE, 1e-4, False, id="bilimoria-wie-time"),
 ]
 
 
@@ -39,15 +41,16 @@ def _solve(name: str, overrides: list[str], seed: int | None):
     return solve(parse_problem(data, source))
 
 
-@pytest.mark.parametrize(("name", "overrides", "objective_rel"), CASES)
-def test_tiny_input_changes_give_the_same_answer(name, overrides, objective_rel):
+@pytest.mark.parametrize(("name", "overrides", "objective_rel", "same_path"), CASES)
+def test_tiny_input_changes_give_the_same_answer(name, overrides, objective_rel, same_path):
     nominal = _solve(name, overrides, None)
     assert nominal.status == "converged", nominal.message
     for seed in (1, 2):
         moved = _solve(name, overrides, seed)
         assert moved.status == nominal.status, moved.message
         assert moved.objective == pytest.approx(nominal.objective, rel=objective_rel)
-        assert abs(moved.iterations - nominal.iterations) <= max(3, 0.3 * nominal.iterations)
+        if same_path:
+            assert abs(moved.iterations - nominal.iterations) <= max(3, 0.3 * nominal.iterations)
 
 
 def test_perturbation_moves_physical_numbers_only():
