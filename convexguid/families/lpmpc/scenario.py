@@ -42,7 +42,8 @@ class Scenario:
     lqr_q: float
     lqr_r: tuple[float, ...]
     forbidden: tuple[tuple[str, np.ndarray, float], ...] = ()
-    """The nominal problem's forbidden attitudes: (name, scalar-last quaternion, least angle in deg)."""
+    """The nominal problem's forbidden attitudes: (name, scalar-last quaternion, least angle in deg as its file
+    states it, before any padding of ``nominal.set``)."""
 
     def initial_state(self, euler_error_deg: np.ndarray, rate_error_degps: np.ndarray) -> np.ndarray:
         """The nominal's initial state with an error in its 3-2-1 Euler angles and body rates."""

@@ -116,6 +116,7 @@ def build_scenario(spec) -> tuple[Scenario | None, Solution]:
     final = nominal_spec.boundary.final
     target_sigma = short_mrp_of_quat(final.q)
     s = spec.lpmpc
+    written = _written_limits(spec)
     scenario = Scenario(
         nominal=nominal_from_solution(nominal_solution, spec.simulation.dt_s),
         inertia=np.array(sc.inertia_matrix, dtype=float),
@@ -127,9 +128,20 @@ def build_scenario(spec) -> tuple[Scenario | None, Solution]:
                             box_constrained=s.correction == "box_qp", backend=s.backend,
                             least_change=s.correction == "least_change"),
         lqr_q=spec.lqr.q, lqr_r=tuple(spec.lqr.r),
-        forbidden=tuple((f.name, np.asarray(f.quaternion, dtype=float), float(f.min_angle_deg))
+        forbidden=tuple((f.name, np.asarray(f.quaternion, dtype=float),
+                         written.get(f.name, float(f.min_angle_deg)))
                         for f in getattr(nominal_spec, "forbidden", ())))
     return scenario, nominal_solution
+
+
+def _written_limits(spec) -> dict[str, float]:
+    """The least angle (deg) to each forbidden attitude of the nominal's problem file as written, by name, before
+    ``nominal.set``: a plan may be padded away from a limit (room for the closed loop), but the flight is held to
+    the limit itself."""
+    from convexguid.spec import load_problem
+
+    written = load_problem(resolve_nominal_path(spec))
+    return {f.name: float(f.min_angle_deg) for f in getattr(written, "forbidden", ())}
 
 
 def short_mrp_of_quat(q: np.ndarray) -> np.ndarray:
