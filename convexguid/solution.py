@@ -31,14 +31,20 @@ if TYPE_CHECKING:
     from convexguid.verify import Verification
 
 
-def optional(along: str | None = None) -> Any:
+def optional(along: str | None = None, compute_time: bool = False) -> Any:
     """A figure field (default None) left out of the summary while it is None.
 
     With ``along``, the figure is written (None included) whenever the figure ``along`` is written, and left
     out otherwise: e.g. the certificate's ``lcvx_burn_time_s`` is null when ``lcvx_status`` says the
-    certificate failed, and absent without a certificate.
+    certificate failed, and absent without a certificate. ``compute_time`` marks a figure that times the
+    computer, not the maneuver (see :meth:`Figures.compute_times`).
     """
-    return field(default=None, metadata={"optional": True, "along": along})
+    return field(default=None, metadata={"optional": True, "along": along, "compute_time": compute_time})
+
+
+def compute_time_figure() -> Any:
+    """A figure field (default None, always written) that times the computer, not the maneuver."""
+    return field(default=None, metadata={"compute_time": True})
 
 
 @dataclass(frozen=True)
@@ -53,6 +59,11 @@ class Figures:
     def names(cls) -> tuple[str, ...]:
         """Every figure this type can carry (its fields, i.e. summary keys), in order."""
         return tuple(f.name for f in dataclasses.fields(cls))
+
+    @classmethod
+    def compute_times(cls) -> frozenset[str]:
+        """The figures that time the computer (they differ from run to run; the answer is the rest)."""
+        return frozenset(f.name for f in dataclasses.fields(cls) if f.metadata.get("compute_time"))
 
     def to_dict(self) -> dict[str, Any]:
         """The figures as summary entries, in field order, without the optional ones that are not set."""

@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
+import math
 import statistics
 from collections import Counter, defaultdict
 from collections.abc import Sequence
 from typing import Any
 
 from convexguid.bench_common import cell, markdown_grid
-from convexguid.robustness.instances import GENERATORS, ROUNDOFF, SMALLER_RUNS, is_close
+from convexguid.robustness.instances import GENERATORS, ROUNDOFF, SMALLER_RUNS
 from convexguid.robustness.trial import GAP_TOLERANCE, Trial, judged
 
 OBJECTIVE_REL = 1e-6
 """Round-off: objectives this close (relative) are the same answer; minimum time :data:`TIME_REL`."""
 TIME_REL = 1e-4
+FIGURE_ABS = 1e-6
+"""Round-off: summary figures (deg, s, N m, ...) this close in absolute terms are the same too (a figure that is
+itself round-off, such as a quaternion's norm error of 4e-8, moves by more than 1e-6 of itself)."""
 
 Result = tuple[Trial, dict[str, Any]]
 
@@ -49,7 +53,7 @@ def _roundoff(rows: list[Result]) -> list[str]:
         objectives = [o.get("objective") for o in outcomes]
         figures = [o.get("figures") or {} for o in outcomes]
         agree = len(statuses) == 1 and all(is_close(objectives[0], x, rel) for x in objectives) and all(
-            is_close(figures[0].get(k), f.get(k), OBJECTIVE_REL) for f in figures for k in figures[0])
+            is_close(figures[0].get(k), f.get(k), OBJECTIVE_REL, FIGURE_ABS) for f in figures for k in figures[0])
         same += agree
         spread = _spread(objectives)
         iterations = [o.get("iterations") for o in outcomes]
@@ -61,7 +65,8 @@ def _roundoff(rows: list[Result]) -> list[str]:
             f"Each problem file solved as written and {len(rows) // max(len(groups), 1) - 1} more times with every "
             f"physical number moved by {ROUNDOFF:.0e} relative (random signs, "
             "`convexguid.spec.perturb.perturb_inputs`), the size of the differences between machines. Same answer: "
-            f"one status, objectives within the tolerance shown and every summary figure within {OBJECTIVE_REL:.0e}. "
+            f"one status, objectives within the tolerance shown and every summary figure within {OBJECTIVE_REL:.0e} "
+            f"relative or {FIGURE_ABS:.0e} absolute (compute times left out). "
             f"Files whose input is another case's result take it from that case's nominal run. Smaller runs: {note}.",
             "", f"**{same} of {len(groups)} files give the same answer.**", "",
             markdown_grid(["problem file", "status", "one status", "objective spread", "tolerance",
@@ -131,3 +136,10 @@ def _iterations(values: list[int | None]) -> str:
 
 def _kkt(met: bool | None) -> str:
     return "-" if met is None else ("yes" if met else "no")
+
+
+def is_close(a: float | None, b: float | None, rel: float, absolute: float = 1e-12) -> bool:
+    """Both None, or both within ``rel`` of each other (relative to the larger) or ``absolute`` apart."""
+    if a is None or b is None:
+        return a is None and b is None
+    return math.isclose(a, b, rel_tol=rel, abs_tol=absolute)

@@ -54,8 +54,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
                        verified=None if solution.verification is None else solution.verification.passed,
                        kkt_met=None if not kkt else kkt.get("met"),
                        minimum_time=getattr(spec, "objective", None) == "time",
-                       figures={name: summary.get(name) for name in solution.figure_names()
-                                if isinstance(summary.get(name), (int, float))})
+                       figures=_answer_figures(solution, summary))
         outcome["wall_time_s"] = time.perf_counter() - started
         hook = get_family(spec.family).independent_optimum
         if trial.reference_starts and hook is not None:
@@ -69,6 +68,13 @@ def run_trial(trial: Trial) -> dict[str, Any]:
         outcome["message"] = one_line(f"{type(exc).__name__}: {exc}", 300)
     outcome.setdefault("wall_time_s", time.perf_counter() - started)
     return outcome
+
+
+def _answer_figures(solution, summary: dict[str, Any]) -> dict[str, float]:
+    """The numeric summary figures that describe the answer (the computer's timings left out)."""
+    timings = type(solution.figures).compute_times() if solution.figures is not None else frozenset()
+    return {name: summary[name] for name in solution.figure_names()
+            if name not in timings and isinstance(summary.get(name), (int, float))}
 
 
 def judged(outcome: dict[str, Any]) -> str:

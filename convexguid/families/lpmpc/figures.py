@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from convexguid.solution import Figures, optional
+from convexguid.solution import Figures, compute_time_figure, optional
 
 
 @dataclass(frozen=True)
@@ -104,9 +104,9 @@ class LpmpcFigures(Figures):
     corrections: int | None = None
     update_checks: int | None = None
     closed_form_leaves_box: int | None = None
-    prediction_time_median_ms: float | None = None
-    correction_time_median_ms: float | None = None
-    integration_time_median_ms: float | None = None
+    prediction_time_median_ms: float | None = compute_time_figure()
+    correction_time_median_ms: float | None = compute_time_figure()
+    integration_time_median_ms: float | None = compute_time_figure()
     update_time_ms: dict[str, float] | None = optional()
     monte_carlo: MonteCarloFigures | None = optional()
     maneuver_time_s: float | None = None

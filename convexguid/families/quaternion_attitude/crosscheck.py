@@ -21,8 +21,9 @@ JITTER = 0.1
 def independent_optimum(spec, solution, starts: int = 4) -> IndependentOptimum:
     """The best objective IPOPT (exact Hessians) reaches on the spec's NLP (its intervals, cones and margins).
 
-    A minimum-energy slew whose final time is a multiple of the minimum time takes the final time ``solution``
-    flew (the only thing taken from it).
+    Taken from ``solution``, so that both solve one NLP: the final time it flew, for a minimum-energy slew whose
+    final time is a multiple of the minimum time, and the node margin its dense check's repairs left on the
+    cones and forbidden attitudes.
 
     Start 0 is the SCP's eigenaxis start; start ``k`` stretches the eigenaxis slew's duration by
     ``STRETCH[k]`` (minimum time) and adds seeded noise of ``JITTER`` times the largest rate and torque of the
@@ -32,6 +33,7 @@ def independent_optimum(spec, solution, starts: int = 4) -> IndependentOptimum:
     if case.tf is None and spec.objective == "energy":
         case = replace(case, tf=solution.figures.maneuver_time_s)
     K = spec.discretization.intervals
+    margin = float(np.radians(solution.figures.node_constraint_margin_deg or 0.0))
     guess, tf_guess = eigenaxis_start(case, K)
     rng = np.random.default_rng(2003)
 
@@ -43,6 +45,6 @@ def independent_optimum(spec, solution, starts: int = 4) -> IndependentOptimum:
             for part in (slice(4, 7), slice(7, 10)):
                 size = max(float(np.abs(start[:, part]).max()), 1e-9)
                 start[1:-1, part] += JITTER * size * rng.standard_normal(start[1:-1, part].shape)
-        return solve_quaternion_attitude_ipopt(case, K, start, tf)
+        return solve_quaternion_attitude_ipopt(case, K, start, tf, margin=margin)
 
     return best_of_starts(solve_from, starts, "IPOPT on the same NLP, exact Hessians")

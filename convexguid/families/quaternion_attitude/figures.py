@@ -40,7 +40,7 @@ class QuaternionAttitudeFigures(Figures):
     cones: tuple[ConeGeometry, ...]
     min_time_s: float | None = optional()
     maneuver_time_s: float | None = optional()
-    planning_time_s: float | None = optional()
+    planning_time_s: float | None = optional(compute_time=True)
     node_constraint_margin_deg: float | None = optional()
     max_quaternion_norm_error: float | None = optional()
     interval_s: float | None = optional()
