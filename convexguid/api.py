@@ -12,6 +12,7 @@ from convexguid.errors import SpecError, value_text
 from convexguid.families import FAMILIES, Family, get_family
 from convexguid.spec import ProblemSpec, load_problem
 from convexguid.spec.loader import with_overrides
+from convexguid.threads import single_threaded
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import IterationRecord
@@ -75,7 +76,8 @@ def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | No
     """
     optional_callable("log", log)
     spec = _spec(problem, overrides)
-    return check_runnable(spec).solve(spec, log)
+    with single_threaded():
+        return check_runnable(spec).solve(spec, log)
 
 
 def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | None = ()) -> Solution:
@@ -97,4 +99,5 @@ def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str |
         simulated = ", ".join(name for name, f in FAMILIES.items() if f.simulated)
         raise SpecError(f"{spec.source}: family: {spec.family!r} is planned, not simulated; use convexguid solve "
                         f"(simulate handles: {simulated})")
-    return family.solve(spec, None)
+    with single_threaded():
+        return family.solve(spec, None)

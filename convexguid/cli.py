@@ -230,6 +230,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from convexguid.families import FAMILIES, get_family
     from convexguid.progress import run
     from convexguid.spec import load_problem
+    from convexguid.threads import single_threaded
 
     for option, value in (("--repeat", args.repeat), ("--runs", args.runs), *(("--nodes", n) for n in args.nodes)):
         if value < 1:
@@ -245,7 +246,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         benched = ", ".join(name for name, f in FAMILIES.items() if f.bench is not None)
         raise SpecError(f"{args.problem}: family {family.name!r} has no benchmark; "
                         f"convexguid bench handles: {benched}")
-    return run(lambda: family.bench(args.problem, args), f"bench {args.problem}")
+    with single_threaded():
+        return run(lambda: family.bench(args.problem, args), f"bench {args.problem}")
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:

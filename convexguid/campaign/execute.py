@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 from convexguid.bench_common import one_line
 from convexguid.errors import SpecError
 from convexguid.spec.loader import MISSING, apply_overrides, parse_problem, value_at
+from convexguid.threads import limit_threads
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -161,7 +162,8 @@ def run_on_dask(tasks: Sequence[RunTask], sink: OutcomeSink, client: Client,
 def dask_client(scheduler: str | None, workers: int | None, connect_timeout_s: float, source: str
                 ) -> Iterator[Client]:
     """A client of the scheduler at ``scheduler``, or of a new local cluster of ``workers`` single-threaded worker
-    processes (every core if None) closed at the end.
+    processes (every core if None) closed at the end. Every worker limits its BLAS/OpenMP threads to one
+    (:mod:`convexguid.threads`).
 
     Raises
     ------
@@ -179,12 +181,14 @@ def dask_client(scheduler: str | None, workers: int | None, connect_timeout_s: f
                             f"{connect_timeout_s:g} s ({one_line(str(exc), 120)}); give the address the scheduler "
                             "prints, e.g. tcp://host:8786") from None
         with client:
+            client.run(limit_threads)
             yield client
         return
     with _workers_ignore_interrupts(), dask.config.set({TRIM_THRESHOLD_KEY: None}):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
                                silence_logs=logging.ERROR)
     with cluster, Client(cluster, set_as_default=False) as client:
+        client.run(limit_threads)
         yield client
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import signal
 import time
 
 import numpy as np
@@ -37,6 +36,7 @@ from convexguid.scp.problem import ProgramSize
 from convexguid.sim.tracking import DisturbanceTorque, Sensors
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
 from convexguid.solution import Solution, Trajectory, make_solution
+from convexguid.threads import pool_worker_init
 from convexguid.verify import ConstraintCheck, Verification
 
 ENVELOPE_STRIDE = 10
@@ -267,12 +267,13 @@ def _monte_carlo(spec, scenario: Scenario) -> tuple[MonteCarloFigures, dict[str,
 def _fly_on_pool(args: list[tuple], workers: int) -> list[dict]:
     """The Monte Carlo runs on a pool of ``workers`` processes, in order, reporting each finished run.
 
-    The workers ignore Ctrl-C (it reaches the whole process group): this process decides. On an interrupt (or any
+    The workers run one BLAS/OpenMP thread each (:mod:`convexguid.threads`) and ignore Ctrl-C (it reaches the whole
+    process group): this process decides. On an interrupt (or any
     error) leaving the ``with`` block terminates the pool: no queued run starts and the runs in flight are dropped,
     so the command exits at once instead of after them (a ``ProcessPoolExecutor`` shut down with ``cancel_futures``
     still finishes the runs in flight: 3 s measured).
     """
-    with multiprocessing.Pool(workers, initializer=signal.signal, initargs=(signal.SIGINT, signal.SIG_IGN)) as pool:
+    with multiprocessing.Pool(workers, initializer=pool_worker_init) as pool:
         arriving = pool.imap(_run_star, args)
         results: list[dict] = []
         while len(results) < len(args):
