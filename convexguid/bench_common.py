@@ -61,7 +61,7 @@ def environment_lines(packages: Sequence[str]) -> list[str]:
         f"- Machine: {machine}, {os.cpu_count()} logical CPUs ({platform.platform()}, "
         f"Python {platform.python_version()})",
         f"- Versions: {versions}",
-        f"- BLAS/OpenMP threads: {threads} (numpy's BLAS is multi-threaded unless limited; on a busy machine "
-        "that slows the SCP's many small dense products)",
+        f"- BLAS/OpenMP threads: one per solve and per worker, set by convexguid (convexguid.threads); the "
+        f"environment had {threads}",
         f"- Date: {when}",
     ]

@@ -32,6 +32,9 @@ def _parser() -> argparse.ArgumentParser:
     validate = sub.add_parser("validate", help="solve the paper cases and write the validation report")
     validate.add_argument("problems", nargs="*", type=Path)
     validate.add_argument("--report", type=Path, default=Path("validation/REPORT.md"))
+    validate.add_argument("--check", action="store_true",
+                          help="solve the cases and compare with the committed report (every number within the "
+                               "reproduction tolerance); write nothing, exit 1 naming each line that disagrees")
     bench = sub.add_parser("bench", help="time the SCP against IPOPT on the same transcription "
                            "(rendezvous files: lcvx vs scp_arcs vs IPOPT; --nodes and --backends do not apply)")
     bench.add_argument("problem", nargs="?", type=Path, default=Path("problems/cai2018_flat_attitude.yaml"))
@@ -208,8 +211,18 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     from convexguid.outputs import describe
     from convexguid.progress import run
     from convexguid.report.timings import timings_path
-    from convexguid.report.validation import check_report_outputs, validate
+    from convexguid.report.validation import check, check_report_outputs, validate
 
+    if args.check:
+        results, differences = run(lambda: check(args.problems, args.report), "validate --check")
+        _print_verdicts(results)
+        for difference in differences:
+            print(f"{args.report}: {difference.describe()}")
+        if differences:
+            print(f"{len(differences)} line(s) of {args.report} not reproduced (within the reproduction tolerance)")
+        else:
+            print(f"{args.report} reproduced: every line agrees within the reproduction tolerance")
+        return EXIT_OK if not differences and all(r.ok for r in results) else EXIT_FAILED
     check_report_outputs(args.report)  # before anything is solved: OutputError, exit 2
     try:
         results = run(lambda: validate(args.problems, args.report), "validate")
@@ -217,12 +230,16 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         reason = exc if isinstance(exc, ConvexGuidError) else f"{exc.filename or args.report}: {describe(exc)}"
         print(f"convexguid: could not write the validation outputs: {reason}", file=sys.stderr)
         return EXIT_FAILED
+    _print_verdicts(results)
+    print(f"report written to {args.report}; compute times in {timings_path(args.report)}")
+    return EXIT_OK if all(r.ok for r in results) else EXIT_FAILED
+
+
+def _print_verdicts(results) -> None:
     for r in results:
         verdict = ("matches paper" if r.ok else "MISMATCH") if r.compared else \
             ("verified, nothing to compare (no reference)" if r.ok else "NOT verified (no reference)")
         print(f"{r.spec.name:<32} {r.solution.status:<12} {verdict}")
-    print(f"report written to {args.report}; compute times in {timings_path(args.report)}")
-    return EXIT_OK if all(r.ok for r in results) else EXIT_FAILED
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:

@@ -1,13 +1,21 @@
 """Plots of a solution: the family's own figures (:attr:`convexguid.families.base.Family.plot`), and the
 labelling and saving helpers they share (every figure is written atomically: a temporary file renamed into
-place).
+place, and a PNG carries no metadata that names the matplotlib version, so one picture is one file's bytes).
+
+A report's pictures are replaced only when what they show changed (:func:`keep_unchanged_pictures`): a plot
+redrawn from data that differ in their last bits may shade a few edge pixels differently, and its file then
+changes although nobody could see it.
 
 matplotlib is imported only by the families' plot modules, when something is plotted.
 """
 
 from __future__ import annotations
 
+import shutil
+from collections.abc import Iterable
 from pathlib import Path
+
+import numpy as np
 
 from convexguid.families import get_family
 from convexguid.outputs import atomic_file
@@ -38,7 +46,38 @@ def write_figure(fig, path: Path, dpi: float | None = None) -> Path:
 
     try:
         with atomic_file(path, "wb") as fh:
-            fig.savefig(fh, format=Path(path).suffix.lstrip(".") or "png", **({"dpi": dpi} if dpi else {}))
+            fmt = Path(path).suffix.lstrip(".") or "png"
+            fixed = {"metadata": {"Software": None}} if fmt == "png" else {}
+            fig.savefig(fh, format=fmt, **({"dpi": dpi} if dpi else {}), **fixed)
     finally:
         plt.close(fig)
     return path
+
+
+PIXEL_LEVEL = 0.1
+"""A pixel differs when one of its channels moved by more than this (on the 0-1 scale)."""
+
+PIXEL_SHARE = 1e-3
+"""Two pictures are the same when at most this share of their pixels differ (anti-aliasing at line edges)."""
+
+
+def same_picture(first: Path, second: Path) -> bool:
+    """The two image files show the same picture: equal size, and at most :data:`PIXEL_SHARE` of the pixels
+    differing by more than :data:`PIXEL_LEVEL`."""
+    import matplotlib.image as mpimg
+
+    a, b = mpimg.imread(first), mpimg.imread(second)
+    if a.shape != b.shape:
+        return False
+    differing = np.abs(a.astype(float) - b.astype(float)) > PIXEL_LEVEL
+    if differing.ndim == 3:
+        differing = differing.any(axis=-1)
+    return float(differing.mean()) <= PIXEL_SHARE
+
+
+def keep_unchanged_pictures(fresh: Iterable[Path], committed_folder: Path) -> None:
+    """Put back the committed file over each fresh picture that :func:`same_picture` finds unchanged."""
+    for path in fresh:
+        committed = committed_folder / path.name
+        if committed.is_file() and same_picture(path, committed):
+            shutil.copyfile(committed, path)

@@ -8,8 +8,12 @@ Quantities under ``reference.values`` are compared with their relative tolerance
 those under ``reference.max_values`` are upper limits (e.g. SCP iterations). A problem named on the command line
 without a ``reference:`` block is solved and verified, and the report says there is nothing to compare.
 
-The report holds only what is the same on every run, so re-running on an unchanged tree leaves it unchanged;
-compute times go to the timings file beside it (:mod:`convexguid.report.timings`, not committed). Output
+The report holds only what is the same on every machine, so re-running on an unchanged tree leaves it
+unchanged: compute times and SCP iteration counts (which round-off moves by a few) go to the timings file beside
+it (:mod:`convexguid.report.timings`, not committed); a committed line is kept wherever the fresh one agrees with
+it within the reproduction tolerance (:func:`~convexguid.report.reproduction.reconcile`), and a committed picture
+wherever the fresh one shows the same (:func:`~convexguid.report.plots.keep_unchanged_pictures`).
+:func:`check` solves the same cases and lists the lines that do not agree, writing nothing. Output
 paths are checked before anything is solved; each case's figures folder is replaced as a whole
 (:func:`~convexguid.outputs.staged_folder`) and every file is written atomically.
 
@@ -23,6 +27,7 @@ which renders the results and solves nothing.
 from __future__ import annotations
 
 import math
+import tempfile
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,7 +37,8 @@ from convexguid.errors import SpecError
 from convexguid.families import get_family
 from convexguid.outputs import check_output_file, check_output_folder, staged_folder, write_text_atomic
 from convexguid.report.comparisons import check_comparisons, comparison_sections, comparison_timings
-from convexguid.report.plots import plot_solution
+from convexguid.report.plots import keep_unchanged_pictures, plot_solution
+from convexguid.report.reproduction import LineDifference, reconcile
 from convexguid.report.timings import render_timings, timings_path
 from convexguid.solution import Solution
 from convexguid.spec import ProblemSpec, load_problem
@@ -91,13 +97,23 @@ def compare(spec: ProblemSpec, solution: Solution) -> tuple[Comparison, ...]:
     return tuple(rows)
 
 
-def run_case(path: Path, figure_root: Path, overrides: Sequence[str] = ()) -> CaseResult:
-    """Solve one case, replace its figures folder ``figure_root/<name>`` as a whole, compare it."""
+def run_case(path: Path, figure_root: Path, overrides: Sequence[str] = (), publish: bool = True) -> CaseResult:
+    """Solve one case, compare it, and draw its pictures.
+
+    With ``publish`` the case's figures folder ``figure_root/<name>`` is replaced as a whole, the committed
+    pictures that show the same kept; without it they are drawn in a temporary folder and nothing is written.
+    """
     spec = load_problem(path, overrides)
     solution = solve(spec)
     folder = figure_root / spec.name
-    with staged_folder(folder, replace=True) as staging:
-        staged = plot_solution(solution, staging)
+    if publish:
+        with staged_folder(folder, replace=True) as staging:
+            staged = plot_solution(solution, staging)
+            keep_unchanged_pictures(staged, folder)
+    else:
+        with tempfile.TemporaryDirectory() as scratch:
+            staging = Path(scratch)
+            staged = plot_solution(solution, staging)
     figures = tuple(folder / p.relative_to(staging) for p in staged)
     return CaseResult(spec, solution, compare(spec, solution), figures)
 
@@ -186,7 +202,8 @@ def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_R
     """Run the reference cases (default: every file in ``problems/`` with a reference) and write the report.
 
     Cases are solved in :func:`run_order` (linked inputs resolved by :func:`link_overrides`); the results,
-    the report's rows and its comparison tables keep the order of ``problems``. The compute times go to
+    the report's rows and its comparison tables keep the order of ``problems``. A committed line the fresh
+    report agrees with is kept (:func:`~convexguid.report.reproduction.reconcile`). The compute times go to
     :func:`~convexguid.report.timings.timings_path` beside the report.
 
     Raises
@@ -197,8 +214,29 @@ def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_R
         If writing fails after the cases were solved.
     """
     report = Path(report)
-    timings = timings_path(report)
     check_report_outputs(report)
+    results = _run_all(problems, report.parent / "figures", publish=True)
+    fresh = render(results, report.parent, comparison_sections(results), timings_path(report).name)
+    write_text_atomic(report, reconcile(_committed(report), fresh).text)
+    write_text_atomic(timings_path(report), render_timings(results, comparison_timings(results), report.name))
+    return results
+
+
+def check(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_REPORT) \
+        -> tuple[list[CaseResult], tuple[LineDifference, ...]]:
+    """Solve the cases as :func:`validate` does and list where the fresh report disagrees with ``report``.
+
+    Nothing is written (the pictures are drawn in a temporary folder, for their names). A missing report
+    disagrees on every line.
+    """
+    report = Path(report)
+    results = _run_all(problems, report.parent / "figures", publish=False)
+    fresh = render(results, report.parent, comparison_sections(results), timings_path(report).name)
+    return results, reconcile(_committed(report) or "", fresh).differences
+
+
+def _run_all(problems: Iterable[str | Path], figure_root: Path, publish: bool) -> list[CaseResult]:
+    """Every case solved in :func:`run_order`, returned in the order given."""
     paths = [Path(p) for p in problems] or reference_problems()
     specs = [load_problem(p) for p in paths]
     order = run_order(specs)
@@ -206,12 +244,17 @@ def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_R
     results: dict[int, CaseResult] = {}
     solved: dict[str, Solution] = {}
     for i in order:
-        results[i] = run_case(paths[i], report.parent / "figures", link_overrides(specs[i], solved))
+        results[i] = run_case(paths[i], figure_root, link_overrides(specs[i], solved), publish=publish)
         solved[specs[i].name] = results[i].solution
-    ordered = [results[i] for i in range(len(paths))]
-    write_text_atomic(report, render(ordered, report.parent, comparison_sections(ordered), timings.name))
-    write_text_atomic(timings, render_timings(ordered, comparison_timings(ordered), report.name))
-    return ordered
+    return [results[i] for i in range(len(paths))]
+
+
+def _committed(report: Path) -> str | None:
+    """The report as it stands (``None`` if there is none yet)."""
+    try:
+        return report.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return None
 
 
 def _fmt(value: float | None) -> str:
@@ -268,14 +311,19 @@ def _case_section(r: CaseResult, base: Path) -> list[str]:
         lines += ["| quantity | paper | convexguid | relative difference | within tolerance |", "|---|---|---|---|---|"]
     for row in r.rows:
         rel = "n/a" if row.rel_diff is None else f"{row.rel_diff:.2e}"
-        paper = _fmt(row.paper) if row.rel_diff is not None or row.ours is None else f"limit {_fmt(row.paper)}"
-        lines.append(f"| {row.quantity} | {paper} | {_fmt(row.ours)} | {rel} ({row.tolerance}) | "
+        limit = row.rel_diff is None and row.ours is not None
+        paper = f"limit {_fmt(row.paper)}" if limit else _fmt(row.paper)
+        # a count under a limit (SCP iterations) moves by a few with round-off: the report says whether it is
+        # within the limit, the timings file has the count
+        count = isinstance(row.ours, int) and not isinstance(row.ours, bool)
+        ours = "within the limit" if limit and count and row.ok else _fmt(row.ours)
+        lines.append(f"| {row.quantity} | {paper} | {ours} | {rel} ({row.tolerance}) | "
                      f"{'yes' if row.ok else 'NO'} |")
     if ref is not None and ref.notes:
         lines += ["", f"Reference notes: {' '.join(ref.notes.split())}"]
     if "scp_s" in sol.timing:
-        lines += ["", f"Status `{sol.status}` after {sol.iterations} SCP iterations ({sol.message}); "
-                  f"solver `{sol.solver}`."]
+        lines += ["", f"Status `{sol.status}` ({sol.message}); solver `{sol.solver}`. The number of SCP iterations "
+                  "is in the timings file."]
     else:
         lines += ["", f"Status `{sol.status}` ({sol.message}); {sol.method} with `{sol.solver}`, "
                   f"{sol.iterations} steps."]
