@@ -36,8 +36,9 @@ from convexguid.errors import BackendError, SpecError, value_text
 from convexguid.geometry import PointingCone
 from convexguid.spec.numbers import as_declared
 
-SPEC_CONFIG = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
-"""Model configuration of every spec model (unknown keys, coercion and inf/nan are errors)."""
+SPEC_CONFIG = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False, defer_build=True)
+"""Model configuration of every spec model (unknown keys, coercion and inf/nan are errors). A model's validator is
+built when it first validates (``defer_build``): a command loads one family's models, not all five."""
 
 SPEC_ERROR_TYPE = "convexguid_spec"
 """pydantic error type raised by :func:`spec_error`."""

@@ -34,7 +34,6 @@ from functools import cached_property, partial
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.interpolate import CubicHermiteSpline
 
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.geometry import PointingCone
@@ -147,8 +146,7 @@ class FlatAttitudeProgram:
         """Cubic Hermite spline through the boundary attitudes and Euler rates (the paper's guess)."""
         p = self.problem
         rates = [euler321_rates_from_body(p.rpy0, p.rate0), euler321_rates_from_body(p.rpyf, p.ratef)]
-        spline = CubicHermiteSpline([p.t0, p.tf], np.vstack([p.rpy0, p.rpyf]), np.vstack(rates))
-        return spline(p.node_times).ravel()
+        return _cubic_hermite(p.t0, p.tf, (np.asarray(p.rpy0), np.asarray(p.rpyf)), rates, p.node_times).ravel()
 
     def variable_scale(self) -> np.ndarray:
         return np.ones(self.num_variables)
@@ -235,3 +233,17 @@ def build_problem(spec) -> FlatAttitudeProblem:
     return FlatAttitudeProblem(spec.name, spec.spacecraft.inertia_matrix, spec.spacecraft.torque_max_Nm,
                                b.t0_s, b.tf_s, b.initial.rpy_rad, b.initial.rate_radps, b.final.rpy_rad,
                                b.final.rate_radps, cones, grid, spec.discretization.check_points_per_interval)
+
+
+def _cubic_hermite(t0: float, t1: float, values: tuple[np.ndarray, np.ndarray],
+                   slopes: list[np.ndarray], times: np.ndarray) -> np.ndarray:
+    """The cubic through ``values`` with derivatives ``slopes`` at ``t0`` and ``t1``, at ``times`` (one row each).
+
+    The Hermite basis :math:`h_{00} = 2s^3 - 3s^2 + 1`, :math:`h_{10} = s^3 - 2s^2 + s`, :math:`h_{01} = -2s^3 + 3s^2`,
+    :math:`h_{11} = s^3 - s^2` with :math:`s = (t - t_0)/(t_1 - t_0)`; slopes are per unit time.
+    """
+    h = t1 - t0
+    s = ((np.asarray(times, dtype=float) - t0) / h)[:, None]
+    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    return h00 * values[0] + h10 * h * slopes[0] + h01 * values[1] + h11 * h * slopes[1]
