@@ -12,13 +12,13 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from convexguid.api import simulate, solve
     from convexguid.campaign import run_campaign
+    from convexguid.problem_files import load_problem
     from convexguid.report.validation import validate
-    from convexguid.spec import load_problem
 
 __all__ = ["load_problem", "run_campaign", "simulate", "solve", "validate"]
 __version__ = "0.1.0"
 
-_PUBLIC = {"load_problem": "convexguid.spec", "simulate": "convexguid.api", "solve": "convexguid.api",
+_PUBLIC = {"load_problem": "convexguid.problem_files", "simulate": "convexguid.api", "solve": "convexguid.api",
            "validate": "convexguid.report.validation", "run_campaign": "convexguid.campaign"}
 """Module of each public name."""
 

@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING
 from convexguid.checks import optional_callable, override_list
 from convexguid.errors import SpecError, value_text
 from convexguid.families import FAMILIES, Family, get_family
-from convexguid.spec import ProblemSpec, load_problem
+from convexguid.problem_files import load_problem
+from convexguid.spec import ProblemSpec
 from convexguid.spec.loader import with_overrides
 from convexguid.threads import single_threaded
 
@@ -77,7 +78,7 @@ def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | No
     optional_callable("log", log)
     spec = _spec(problem, overrides)
     with single_threaded():
-        return check_runnable(spec).solve(spec, log)
+        return check_runnable(spec).solve(spec, log, PLANNER)
 
 
 def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | None = ()) -> Solution:
@@ -85,7 +86,7 @@ def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str |
 
     ``overrides`` are ``dotted.key=value`` strings as for ``convexguid simulate --set`` (None: none; a single
     string: one override). See
-    :func:`convexguid.sim.runner.simulate_problem` for the status, checks and summary figures.
+    :func:`convexguid.families.potential_function.runner.simulate_problem` for the status, checks and summary figures.
 
     Raises
     ------
@@ -100,4 +101,20 @@ def simulate(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str |
         raise SpecError(f"{spec.source}: family: {spec.family!r} is planned, not simulated; use convexguid solve "
                         f"(simulate handles: {simulated})")
     with single_threaded():
-        return family.solve(spec, None)
+        return family.solve(spec, None, PLANNER)
+
+
+class _ApiPlanner:
+    """The :class:`~convexguid.families.base.Planner` every family hook gets: this module's loader and solve."""
+
+    @staticmethod
+    def load(path: str | PathLike[str], overrides: Sequence[str] = ()) -> ProblemSpec:
+        return load_problem(path, overrides)
+
+    @staticmethod
+    def solve(spec: ProblemSpec) -> Solution:
+        return solve(spec)
+
+
+PLANNER = _ApiPlanner()
+"""What a family that needs another problem's plan is given (see :class:`~convexguid.families.base.Planner`)."""

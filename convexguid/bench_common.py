@@ -13,9 +13,6 @@ import platform
 from collections.abc import Callable, Sequence
 from typing import TypeVar
 
-FLAT_DEFAULT_NODES = (16, 32, 64, 128)
-"""``convexguid bench``'s default ``--nodes`` (flat-attitude degrees); other families read it as "their default"."""
-
 _T = TypeVar("_T")
 
 

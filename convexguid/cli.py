@@ -11,7 +11,6 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from convexguid.bench_common import FLAT_DEFAULT_NODES
 from convexguid.errors import ConvexGuidError, SpecError
 
 if TYPE_CHECKING:
@@ -38,7 +37,8 @@ def _parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="time the SCP against IPOPT on the same transcription "
                            "(rendezvous files: lcvx vs scp_arcs vs IPOPT; --nodes and --backends do not apply)")
     bench.add_argument("problem", nargs="?", type=Path, default=Path("problems/cai2018_flat_attitude.yaml"))
-    bench.add_argument("--nodes", type=int, nargs="+", default=list(FLAT_DEFAULT_NODES))
+    bench.add_argument("--nodes", type=int, nargs="+",
+                       help="discretization sizes to time (default: the family's own list)")
     bench.add_argument("--repeat", type=int, default=3, help="timed runs per case (best is reported)")
     bench.add_argument("--backends", nargs="+", default=["clarabel", "osqp"])
     bench.add_argument("--runs", type=int, default=20,
@@ -149,8 +149,8 @@ def _report_lost_outputs(sol: Solution, args: argparse.Namespace, failed: list[s
 
 def _cmd_solve(args: argparse.Namespace) -> int:
     from convexguid.api import check_runnable, solve
+    from convexguid.problem_files import load_problem
     from convexguid.progress import run
-    from convexguid.spec import load_problem
 
     spec = load_problem(args.problem, args.overrides)
     check_runnable(spec)
@@ -176,35 +176,21 @@ def _finish(sol: Solution, args: argparse.Namespace) -> int:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from convexguid.api import check_runnable, simulate
-    from convexguid.families.potential_function.spec import PotentialFunctionProblem
+    from convexguid.families import get_family
+    from convexguid.problem_files import load_problem
     from convexguid.progress import run
-    from convexguid.spec import load_problem
 
     spec = load_problem(args.problem, args.overrides)
     check_runnable(spec)
     _check_outputs(args)
-    if not args.quiet and isinstance(spec, PotentialFunctionProblem):
-        sweep = f"; sweep theta_m = {', '.join(map(str, spec.sweep.theta_m_deg))} deg" if spec.sweep else ""
-        print(f"simulating {spec.name}: {spec.simulation.t_final_s:g} s in steps of {spec.simulation.dt_s:g} s{sweep}")
+    family = get_family(spec.family)
+    if not args.quiet and family.console_header is not None:
+        print(family.console_header(spec))
     sol = run(lambda: simulate(spec), f"simulate {spec.name}")
-    if not args.quiet:
-        _print_sweep(sol)
+    if not args.quiet and family.console_details is not None:
+        for line in family.console_details(sol):
+            print(line)
     return _finish(sol, args)
-
-
-def _print_sweep(sol: Solution) -> None:
-    """One line per sweep case of a simulation (nothing without a sweep)."""
-    from convexguid.families.potential_function.figures import PotentialFunctionFigures
-
-    figures = sol.figures
-    cases = (figures.sweep or ()) if isinstance(figures, PotentialFunctionFigures) else ()
-    if cases:
-        print(f"{'theta_m deg':>11} {'t 1deg s':>9} {'t 0.1deg s':>10} {'min theta_b deg':>15} "
-              f"{'max |u| N m':>11} {'passed':>6}")
-    for c in cases:
-        times = [f"{t:.1f}" if t is not None else "-" for t in (c.maneuver_time_1deg_s, c.maneuver_time_01deg_s)]
-        print(f"{c.theta_m_deg:>11g} {times[0]:>9} {times[1]:>10} {c.min_theta_b_deg:>15.3f} "
-              f"{c.max_abs_torque_Nm:>11.4g} {'yes' if c.passed else 'NO':>6}")
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -243,13 +229,15 @@ def _print_verdicts(results) -> None:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
+    from convexguid.api import PLANNER, check_resolved
     from convexguid.backends import check_backend_name
     from convexguid.families import FAMILIES, get_family
+    from convexguid.problem_files import load_problem
     from convexguid.progress import run
-    from convexguid.spec import load_problem
     from convexguid.threads import single_threaded
 
-    for option, value in (("--repeat", args.repeat), ("--runs", args.runs), *(("--nodes", n) for n in args.nodes)):
+    counts = [("--repeat", args.repeat), ("--runs", args.runs), *(("--nodes", n) for n in args.nodes or ())]
+    for option, value in counts:
         if value < 1:
             raise SpecError(f"{option}: must be at least 1 (got {value})")
     for name in args.backends:
@@ -258,13 +246,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         except ConvexGuidError as exc:
             raise SpecError(f"--backends: {exc}") from None
     spec = load_problem(args.problem)
+    check_resolved(spec, overridable=False)  # an input waiting for another case's result: only validate has it
     family = get_family(spec.family)
     if family.bench is None:
         benched = ", ".join(name for name, f in FAMILIES.items() if f.bench is not None)
         raise SpecError(f"{args.problem}: family {family.name!r} has no benchmark; "
                         f"convexguid bench handles: {benched}")
     with single_threaded():
-        return run(lambda: family.bench(args.problem, args), f"bench {args.problem}")
+        return run(lambda: family.bench(spec, args, PLANNER), f"bench {args.problem}")
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:

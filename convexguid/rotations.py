@@ -68,6 +68,11 @@ def _matrix3(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
     return out
 
 
+def cross3(a: NDArray, b: NDArray) -> NDArray:
+    """Cross product of two 3-vectors (several times faster than ``np.cross`` for single vectors)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def skew(v: ArrayLike) -> NDArray:
     r"""Cross-product matrix :math:`[v\times]`, :math:`[v\times] u = v \times u`; shape ``(..., 3, 3)``."""
     v = _arr(v, 3)

@@ -16,6 +16,7 @@ import pytest
 import convexguid.families.quaternion_attitude.bench as attitude_bench
 from convexguid.cli import main
 from convexguid.families.quaternion_attitude.bench import COLUMNS, attitude_bench_markdown, bench_attitude_rows
+from convexguid.problem_files import load_problem
 from convexguid.reference import casadi_available
 
 MULTICONE = Path(__file__).resolve().parents[1] / "problems" / "wang_multicone_time.yaml"
@@ -24,7 +25,7 @@ K = 10
 
 @pytest.fixture(scope="module")
 def rows():
-    return bench_attitude_rows(MULTICONE, [K], repeat=1)
+    return bench_attitude_rows(load_problem(MULTICONE), [K], repeat=1)
 
 
 def _row(rows, method):
@@ -80,12 +81,12 @@ def test_ipopt_rows_have_positive_times_and_gaps(rows, objective):
 def test_no_ipopt_rows_without_ipopt():
     if casadi_available():
         pytest.skip("covered by the module run; this checks the rows a casadi-less install gets")
-    rows = bench_attitude_rows(MULTICONE, [K], repeat=1)
+    rows = bench_attitude_rows(load_problem(MULTICONE), [K], repeat=1)
     assert not [r for r in rows if r.solver.startswith("ipopt")]
 
 
 def test_markdown_has_the_table_and_notes(rows):
-    text = attitude_bench_markdown(rows, MULTICONE, [K], 1)
+    text = attitude_bench_markdown(rows, str(MULTICONE), [K], 1)
     assert "| " + " | ".join(COLUMNS) + " |" in text
     assert "OPENBLAS_NUM_THREADS=" in text
     assert "--nodes 10 --repeat 1" in text
@@ -94,15 +95,16 @@ def test_markdown_has_the_table_and_notes(rows):
     _ok_row(rows, "scp time")  # the timing note is written for a converged minimum-time SCP only
     assert "SCP minimum time at K = 10 (11 nodes) under 1 s" in text
     # a file without a target gets the times only
-    other = attitude_bench_markdown(rows, MULTICONE.with_name("my_slew.yaml"), [K], 1)
+    other = attitude_bench_markdown(rows, str(MULTICONE.with_name("my_slew.yaml")), [K], 1)
     assert "SCP minimum time at K = 10 (11 nodes): whole solve" in other and "met)" not in other
 
 
 def test_bench_command_dispatches_attitude_files(monkeypatch, tmp_path):
-    """``convexguid bench`` hands the file on; the command line's flat default grid means the attitude default."""
+    """``convexguid bench`` hands the loaded file on; without ``--nodes`` the attitude default grid."""
     calls = []
     monkeypatch.setattr(attitude_bench, "run_attitude_bench", lambda *args: calls.append(args) or 0)
     out = tmp_path / "bench.md"
     assert main(["bench", str(MULTICONE), "--repeat", "2", "--output", str(out)]) == 0
     assert main(["bench", str(MULTICONE), "--nodes", "12", "24", "--repeat", "1"]) == 0
-    assert calls == [(MULTICONE, attitude_bench.DEFAULT_INTERVALS, 2, out), (MULTICONE, [12, 24], 1, None)]
+    assert [(spec.source, *rest) for spec, *rest in calls] == [
+        (str(MULTICONE), attitude_bench.DEFAULT_INTERVALS, 2, out), (str(MULTICONE), [12, 24], 1, None)]

@@ -16,12 +16,12 @@ from convexguid.cli import main
 from convexguid.errors import SpecError
 from convexguid.families import get_family
 from convexguid.families.quaternion_attitude.figures import ConeGeometry
+from convexguid.problem_files import load_problem
 from convexguid.report import comparisons
 from convexguid.report.comparisons import TABLES, check_comparisons, comparison_sections, comparison_timings
 from convexguid.report.validation import CaseResult, link_overrides, run_order
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution
-from convexguid.spec import load_problem
 from convexguid.verify import ConstraintCheck, Verification
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

@@ -12,11 +12,11 @@ from scipy.integrate import solve_ivp
 from convexguid.dynamics.rigid_body import rigid_body_rhs, rigid_body_rhs_fast
 from convexguid.dynamics.torque import LinearTorque, TorqueCommand
 from convexguid.families.flat_attitude.solve import planning_setup, torque_command, verify_plan
+from convexguid.families.quaternion_attitude.path_transfer import multicone_scenario, plan_path_transfer
 from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_start
 from convexguid.families.quaternion_attitude.solve import build_case
-from convexguid.planners import multicone_scenario, plan_path_transfer
+from convexguid.problem_files import load_problem
 from convexguid.rotations import euler321_to_quat, quat_angle_between
-from convexguid.spec import load_problem
 from convexguid.verify import propagate_attitude
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

@@ -19,10 +19,10 @@ from test_scp_engine import HS071_X, HS071Epigraph, _SmallProgram
 
 from convexguid.api import solve
 from convexguid.families import get_family
+from convexguid.problem_files import load_problem
 from convexguid.scp.engine import solve_scp
 from convexguid.scp.lagrangian import CurvatureWeights, LagrangianHessian, lagrangian_gradient
 from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, SCPSettings
-from convexguid.spec import load_problem
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 

@@ -138,7 +138,7 @@ def test_every_planned_family_has_a_contract_case():
 @pytest.mark.parametrize("name", sorted(PLANNED_CASES))
 def test_planning_setup_runs_through_the_engine_loop_to_a_verified_plan(name):
     """The Family contract alone (program, settings, checker) gives a plan the family's own check passes."""
-    from convexguid.spec import load_problem
+    from convexguid.problem_files import load_problem
 
     file, overrides = PLANNED_CASES[name]
     spec = load_problem(Path(__file__).resolve().parents[1] / "problems" / file, overrides)

@@ -8,7 +8,7 @@ import pytest
 
 from convexguid import solve
 from convexguid.families.flat_attitude.program import FlatAttitudeProgram, build_problem
-from convexguid.spec import load_problem
+from convexguid.problem_files import load_problem
 
 PAPER = str(Path(__file__).resolve().parents[1] / "problems" / "cai2018_flat_attitude.yaml")
 PAPER_J, PAPER_J_RTOL = 0.2607, 5e-4  # Table 1 (J at tf = 100 s) and the tolerance of the file's reference block

@@ -23,7 +23,7 @@ from convexguid.cli import main
 from convexguid.dynamics.rigid_body import min_slew_time
 from convexguid.errors import SpecError
 from convexguid.families import FAMILIES
-from convexguid.spec import load_problem
+from convexguid.problem_files import load_problem
 from convexguid.spec.loader import MAX_EXPANDED_NODES
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -225,9 +225,9 @@ def test_flat_bench_exits_1_when_a_row_failed(monkeypatch, capsys):
             bench.BenchRow(16, "scp/clarabel [nodes]", "converged", 0.26, 5, 0.1, ok=True)]
     monkeypatch.setattr(bench, "bench_nodes", lambda *args: rows)
     monkeypatch.setattr(bench, "casadi_available", lambda: False)
-    assert bench.run_bench(FLAT, [16], 1, ["osqp", "clarabel"]) == 1
+    assert bench.run_bench(load_problem(FLAT), [16], 1, ["osqp", "clarabel"]) == 1
     monkeypatch.setattr(bench, "bench_nodes", lambda *args: rows[1:])
-    assert bench.run_bench(FLAT, [16], 1, ["clarabel"]) == 0
+    assert bench.run_bench(load_problem(FLAT), [16], 1, ["clarabel"]) == 0
 
 
 # --- size limits -------------------------------------------------------------------------------------------------
@@ -271,7 +271,7 @@ def test_every_problem_file_is_within_its_family_limit():
 def test_out_of_memory_is_one_line_not_a_traceback(monkeypatch, capsys):
     import dataclasses
 
-    def exhausted(spec, log):
+    def exhausted(spec, log, planner):
         raise MemoryError
 
     monkeypatch.setitem(FAMILIES, "flat_attitude", dataclasses.replace(FAMILIES["flat_attitude"], solve=exhausted))
@@ -332,7 +332,7 @@ def test_ctrl_c_stops_the_work_at_its_next_report():
 
 
 def test_ctrl_c_during_a_simulation_exits_130_and_writes_nothing(monkeypatch, tmp_path, capsys):
-    from convexguid.sim import reaction_wheel
+    from convexguid.families.potential_function import plant as reaction_wheel
 
     calls = []
 

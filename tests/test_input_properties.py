@@ -60,7 +60,7 @@ class Accepted(Exception):  # noqa: N818 - a signal, not an error
     """Raised by the stubbed solve: the input passed every check."""
 
 
-def _accepted(spec, log=None):
+def _accepted(spec, log=None, planner=None):
     raise Accepted
 
 

@@ -16,7 +16,7 @@ from convexguid.dynamics.clohessy_wiltshire import cw_zoh
 from convexguid.families.rendezvous.case import build_case
 from convexguid.families.rendezvous.lcvx import burn_structure, solve_lcvx
 from convexguid.families.rendezvous.lcvx_reference import solve_lcvx_cvxpy
-from convexguid.spec import load_problem
+from convexguid.problem_files import load_problem
 
 PAPER = Path(__file__).resolve().parents[1] / "problems" / "wang2003_rendezvous.yaml"
 

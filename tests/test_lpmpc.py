@@ -105,11 +105,12 @@ def test_an_infeasible_nominal_ends_with_its_honest_status():
 def test_a_padded_plan_is_flown_against_the_limit_as_written():
     """guo2011_lpmpc_track plans 0.5 deg away from the forbidden attitude (``nominal.set``); the flight is held to
     the problem file's own 10 deg, not to the padding."""
+    from convexguid.api import PLANNER
     from convexguid.families.lpmpc.solve import build_scenario
-    from convexguid.spec import load_problem
+    from convexguid.problem_files import load_problem
 
     track = load_problem(PROBLEMS / "guo2011_lpmpc_track.yaml", ["nominal.tf_from=null", "nominal.tf_s=196.8"])
-    scenario, nominal = build_scenario(track)
+    scenario, nominal = build_scenario(track, PLANNER)
     assert nominal.ok, nominal.message
     assert [bound for _, _, bound in scenario.forbidden] == [10.0]
     planned = [c for c in nominal.verification.checks if c.name.startswith("forbidden")][0]

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from convexguid.control.lpmpc import box_constrained_correction, energy_optimal_correction, terminal_map
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices, mrp_state_derivative
+from convexguid.families.lpmpc.controller import box_constrained_correction, energy_optimal_correction, terminal_map
 from convexguid.transcription.lgr import RadauGrid, lgr_differentiation, lgr_points, lgr_weights, radau_support
 
 INERTIA = np.diag([5.0, 70.0, 70.0])

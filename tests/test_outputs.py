@@ -33,9 +33,9 @@ from convexguid.outputs import (
     staged_folder,
     write_text_atomic,
 )
+from convexguid.problem_files import load_problem
 from convexguid.report.timings import render_timings, timings_path
 from convexguid.report.validation import CaseResult, render
-from convexguid.spec import load_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "problems" / "cai2018_flat_attitude.yaml"

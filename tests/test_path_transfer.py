@@ -8,9 +8,15 @@ import numpy as np
 import pytest
 
 from convexguid.errors import SpecError
+from convexguid.families.quaternion_attitude.path_transfer import (
+    PathTransferProblem,
+    bound_evaluation,
+    multicone_scenario,
+    plan_path_transfer,
+    pointing_evaluation,
+    relaxed_node_count,
+)
 from convexguid.geometry import PointingCone, eigenaxis_path, eigenaxis_rotation, keep_out_angles_deg
-from convexguid.planners import PathTransferProblem, multicone_scenario, plan_path_transfer
-from convexguid.planners.path_transfer import bound_evaluation, pointing_evaluation, relaxed_node_count
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_derivative
 from convexguid.verify import propagate_attitude
 

@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from convexguid.api import solve
-from convexguid.spec.loader import apply_overrides, parse_problem, read_yaml_mapping
+from convexguid.problem_files import parse_problem
+from convexguid.spec.loader import apply_overrides, read_yaml_mapping
 from convexguid.spec.perturb import perturb_inputs
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

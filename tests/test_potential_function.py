@@ -8,7 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from convexguid.control.potential_function import (
+from convexguid.dynamics.disturbance import guo2011_disturbance, no_disturbance
+from convexguid.errors import SpecError
+from convexguid.families.potential_function.controller import (
     PotentialFunctionController,
     PotentialFunctionGains,
     angle_to_plane,
@@ -19,7 +21,16 @@ from convexguid.control.potential_function import (
     guo2011_fixed_gains,
     repulsive_potential,
 )
-from convexguid.errors import SpecError
+from convexguid.families.potential_function.plant import (
+    GUO2011_INERTIA,
+    GUO2011_Q0,
+    GUO2011_Q_COMMAND,
+    GUO2011_Q_FORBIDDEN,
+    maneuver_metrics,
+    quaternion_rate,
+    settling_time,
+    simulate,
+)
 from convexguid.rotations import (
     axis_angle_to_quat,
     quat_angle_between,
@@ -27,18 +38,6 @@ from convexguid.rotations import (
     quat_multiply,
     quat_normalize,
     quat_to_dcm,
-)
-from convexguid.sim.reaction_wheel import (
-    GUO2011_INERTIA,
-    GUO2011_Q0,
-    GUO2011_Q_COMMAND,
-    GUO2011_Q_FORBIDDEN,
-    guo2011_disturbance,
-    maneuver_metrics,
-    no_disturbance,
-    quaternion_rate,
-    settling_time,
-    simulate,
 )
 
 DEG = math.pi / 180

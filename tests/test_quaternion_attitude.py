@@ -12,9 +12,9 @@ from convexguid.api import _spec, solve
 from convexguid.errors import SpecError
 from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_start
 from convexguid.families.quaternion_attitude.solve import build_case, scp_settings
+from convexguid.problem_files import load_problem
 from convexguid.rotations import quat_sign_continuous
 from convexguid.scp.engine import solve_scp
-from convexguid.spec import load_problem
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 MULTICONE = PROBLEMS / "wang_multicone_time.yaml"

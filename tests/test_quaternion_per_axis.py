@@ -23,9 +23,9 @@ from convexguid.families.quaternion_attitude.program import (
     eigenaxis_time_guess,
 )
 from convexguid.families.quaternion_attitude.solve import build_case, path_transfer_problem, scp_settings
+from convexguid.problem_files import load_problem
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_to_euler321
 from convexguid.scp.engine import solve_scp
-from convexguid.spec import load_problem
 from convexguid.verify import TORQUE_AXIS_CHECKS, AttitudeTrack, torque_box_checks, verify_attitude_track
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

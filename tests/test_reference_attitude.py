@@ -27,8 +27,8 @@ from convexguid.families.quaternion_attitude.program import (  # noqa: E402
 from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt  # noqa: E402
 from convexguid.families.quaternion_attitude.solve import build_case  # noqa: E402
 from convexguid.geometry import PointingCone, keep_out_angles_deg  # noqa: E402
+from convexguid.problem_files import load_problem
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between  # noqa: E402
-from convexguid.spec import load_problem  # noqa: E402
 
 MULTICONE = Path(__file__).resolve().parents[1] / "problems" / "wang_multicone_time.yaml"
 DEFECT_TOL = 1e-6

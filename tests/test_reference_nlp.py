@@ -24,10 +24,10 @@ from convexguid.families.flat_attitude.program import (  # noqa: E402
     cone_cosine,
 )
 from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt  # noqa: E402
+from convexguid.problem_files import load_problem
 from convexguid.reference import ReferenceResult  # noqa: E402
 from convexguid.scp.engine import SCPResult, solve_scp  # noqa: E402
 from convexguid.scp.problem import SCPSettings  # noqa: E402
-from convexguid.spec import load_problem  # noqa: E402
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 OBJECTIVE_RTOL = 5e-3

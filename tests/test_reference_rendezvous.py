@@ -25,9 +25,9 @@ from convexguid.families.rendezvous.reference import (  # noqa: E402
     cw_free_motion,
     solve_rendezvous_arcs_ipopt,
 )
+from convexguid.problem_files import load_problem  # noqa: E402
 from convexguid.scp.engine import SCPResult, solve_scp  # noqa: E402
 from convexguid.scp.problem import SCPSettings  # noqa: E402
-from convexguid.spec import load_problem  # noqa: E402
 
 PAPER = Path(__file__).resolve().parents[1] / "problems" / "wang2003_rendezvous.yaml"
 BURN_TIME_RTOL = 1e-4
@@ -81,7 +81,7 @@ def test_casadi_free_motion_matches_matrix_exponential(dim, dt):
 
 def test_bench_runs_and_lists_the_methods(tmp_path):
     out = tmp_path / "bench.md"
-    assert run_rendezvous_bench(PAPER, repeat=1, output=out) == 0
+    assert run_rendezvous_bench(load_problem(PAPER), repeat=1, output=out) == 0
     text = out.read_text()
     for method in ("lcvx", "lcvx (cvxpy statement)", "scp_arcs", "ipopt"):
         assert f"| {method} |" in text

@@ -17,7 +17,7 @@ from convexguid.errors import SpecError
 from convexguid.families.rendezvous.arcs import ArcsProgram
 from convexguid.families.rendezvous.case import build_case
 from convexguid.families.rendezvous.lcvx import burn_structure, solve_lcvx
-from convexguid.spec import load_problem
+from convexguid.problem_files import load_problem
 from convexguid.transcription.hermite_simpson import hermite_simpson_defects
 
 PAPER = Path(__file__).parent.parent / "problems" / "wang2003_rendezvous.yaml"

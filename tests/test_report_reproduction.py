@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
 from convexguid.cli import main  # noqa: E402
-from convexguid.report.plots import keep_unchanged_pictures, same_picture, write_figure  # noqa: E402
+from convexguid.figure_files import keep_unchanged_pictures, same_picture, write_figure  # noqa: E402
 from convexguid.report.reproduction import PrintedNumber, lines_agree, reconcile, skeleton  # noqa: E402
 from convexguid.spec.loader import read_yaml_mapping  # noqa: E402
 from convexguid.spec.perturb import perturb_inputs  # noqa: E402

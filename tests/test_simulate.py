@@ -13,7 +13,7 @@ import pytest
 
 import convexguid
 from convexguid.errors import SpecError
-from convexguid.spec import load_problem
+from convexguid.problem_files import load_problem
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 FIXED = PROBLEMS / "guo2011_fixed_gains.yaml"

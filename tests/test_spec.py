@@ -13,7 +13,8 @@ import yaml
 
 from convexguid.errors import SpecError
 from convexguid.families import get_family
-from convexguid.spec import ProblemSpec, apply_overrides, load_problem, parse_problem
+from convexguid.problem_files import load_problem, parse_problem
+from convexguid.spec import ProblemSpec, apply_overrides
 
 PROBLEM = Path(__file__).resolve().parents[1] / "problems" / "cai2018_flat_attitude.yaml"
 _DELETE = object()
@@ -234,7 +235,8 @@ def test_overrides_on_a_spec_built_in_python_apply_to_its_own_data(tmp_path):
     """A spec made from a dict (no file behind it) takes overrides from the data it was made from; a spec read
     from a file does not read the file again (it may have changed or moved since)."""
     import convexguid
-    from convexguid.spec.loader import parse_problem, with_overrides
+    from convexguid.problem_files import parse_problem
+    from convexguid.spec.loader import with_overrides
 
     data = yaml.safe_load(Path("problems/cai2018_flat_attitude.yaml").read_text())
     built = parse_problem(data)

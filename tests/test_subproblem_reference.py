@@ -28,10 +28,10 @@ import scipy.sparse as sp
 
 from convexguid.backends import make_backend
 from convexguid.families.flat_attitude.program import FlatAttitudeProgram, build_problem
+from convexguid.problem_files import load_problem
 from convexguid.scp.assembly import SubproblemAssembler
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
-from convexguid.spec import load_problem
 
 FLAT = Path(__file__).resolve().parents[1] / "problems" / "cai2018_flat_attitude.yaml"
 TOL = 1e-6

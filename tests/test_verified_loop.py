@@ -65,7 +65,7 @@ def test_flat_attitude_saturated_case_is_within_half_a_percent_of_ipopt(flat_sat
     pytest.importorskip("casadi")
     from convexguid.families.flat_attitude.program import FlatAttitudeProgram, build_problem
     from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt
-    from convexguid.spec import load_problem
+    from convexguid.problem_files import load_problem
 
     # the same transcription (nodes and check points) from the same cubic guess, without the repairs
     problem = build_problem(load_problem(PROBLEMS / "cai2018_flat_attitude.yaml", FLAT_SATURATED))
@@ -118,8 +118,8 @@ def test_a_start_that_breaks_the_torque_box_is_restored_and_still_reaches_the_op
     """The same slew from an eigenaxis start squeezed into 0.8 x its time: 1.56x the torque box at the ends."""
     from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_guess
     from convexguid.families.quaternion_attitude.solve import planning_setup
+    from convexguid.problem_files import load_problem
     from convexguid.scp.verified import PlanningSetup
-    from convexguid.spec import load_problem
 
     setup = planning_setup(load_problem(PROBLEMS / "wang_multicone_time.yaml", SLEW_180))
     program = setup.program

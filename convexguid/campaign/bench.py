@@ -133,8 +133,10 @@ def _environment(name: str, value: str | None) -> Iterator[None]:
 
 
 def _import_solver() -> None:
+    """The imports every planned run makes (the API, the SCP engine and its check-repair loop, SciPy's
+    integrators); a family's own modules are small beside them."""
     import convexguid.api  # noqa: F401
-    import convexguid.families.flat_attitude.solve  # noqa: F401
+    import convexguid.scp.verified  # noqa: F401
 
 
 def _busy_loop(_: int = 0) -> float:

@@ -27,7 +27,8 @@ from typing import TYPE_CHECKING, Any
 
 from convexguid.bench_common import one_line
 from convexguid.errors import SpecError
-from convexguid.spec.loader import MISSING, apply_overrides, parse_problem, value_at
+from convexguid.problem_files import parse_problem
+from convexguid.spec.loader import MISSING, apply_overrides, value_at
 from convexguid.threads import limit_threads
 
 if TYPE_CHECKING:

@@ -20,10 +20,9 @@ from typing import Any
 import numpy as np
 
 from convexguid.campaign.plan import Run
-from convexguid.campaign.report import grid_points, quantities
 from convexguid.campaign.spec import Campaign
-from convexguid.campaign.table import is_ok, numeric_keys
-from convexguid.report.plots import write_figure
+from convexguid.campaign.table import grid_points, is_ok, numeric_keys, quantities
+from convexguid.figure_files import write_figure
 
 MAX_SERIES = 8
 """Lines per sweep plot at most (further combinations of the other grid keys are left out)."""

@@ -20,8 +20,9 @@ import numpy as np
 
 from convexguid.bench_common import markdown_grid, one_line
 from convexguid.campaign.plan import Run, yaml_text
+from convexguid.campaign.plots import write_plots
 from convexguid.campaign.spec import Campaign
-from convexguid.campaign.table import TABLE_FILE, is_ok
+from convexguid.campaign.table import TABLE_FILE, grid_points, is_ok, quantities
 from convexguid.solution import write_text_atomic
 
 REPORT_FILE = "report.md"
@@ -29,11 +30,6 @@ LISTED_FAILURES = 20
 """Runs listed under "Runs that did not converge and verify" (the table has them all)."""
 LISTED_GRID_POINTS = 200
 """Grid points listed in the table of results by grid point."""
-
-
-def quantities(campaign: Campaign) -> list[str]:
-    """The reported quantities: the objective, then the campaign's figures."""
-    return ["objective", *campaign.spec.figures]
 
 
 def number(value: float | None) -> str:
@@ -55,8 +51,6 @@ def replay_command(campaign: Campaign, overrides: Sequence[str]) -> str:
 
 def write_report(campaign: Campaign, runs: Sequence[Run], rows: Sequence[dict[str, Any]], directory: Path) -> Path:
     """Write ``report.md`` and its plots into ``directory``; return the report's path."""
-    from convexguid.campaign.plots import write_plots
-
     plots = write_plots(campaign, runs, rows, directory)
     lines = [f"# Campaign {campaign.spec.name}", ""]
     if campaign.spec.description:
@@ -127,15 +121,6 @@ def _statistics(campaign: Campaign, rows: Sequence[dict[str, Any]]) -> list[str]
     columns = ["figure", "status", "runs", "mean", "std", "min", "5 %", "median", "95 %", "max"]
     return ["## Figures", "", "Over the runs of each status that give the figure (std with n - 1).", "",
             markdown_grid(columns, [":---", ":---"] + ["---:"] * 8, body), ""]
-
-
-def grid_points(campaign: Campaign, rows: Sequence[dict[str, Any]]) -> list[tuple[tuple, list[dict[str, Any]]]]:
-    """The rows grouped by grid point (the grid keys' values), in run order."""
-    keys = [k for axis in campaign.spec.grid for k in axis.names]
-    groups: dict[tuple, list[dict[str, Any]]] = {}
-    for row in rows:
-        groups.setdefault(tuple(row[k] for k in keys), []).append(row)
-    return list(groups.items())
 
 
 def _by_grid_point(campaign: Campaign, rows: Sequence[dict[str, Any]]) -> list[str]:

@@ -36,15 +36,9 @@ from pydantic import Field, ValidationError, model_validator
 from convexguid.campaign.plan import override
 from convexguid.errors import SpecError
 from convexguid.families import Family, get_family
+from convexguid.problem_files import parse_problem
 from convexguid.spec.common import NonEmptyStr, PositiveFloat, SpecModel, spec_error
-from convexguid.spec.loader import (
-    MISSING,
-    apply_overrides,
-    describe_validation_error,
-    parse_problem,
-    read_yaml_mapping,
-    value_at,
-)
+from convexguid.spec.loader import MISSING, apply_overrides, describe_validation_error, read_yaml_mapping, value_at
 
 DottedKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_]+(\.[A-Za-z0-9_]+)*$")]
 """A key path as for ``--set``: names and list indices joined by dots."""

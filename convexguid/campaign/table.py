@@ -155,3 +155,17 @@ def _write_atomic(table: pa.Table, path: Path) -> None:
     """Write ``table`` to ``path`` through :func:`~convexguid.outputs.atomic_file` (a part is whole or absent)."""
     with atomic_file(path, "wb") as fh:
         pq.write_table(table, fh)
+
+
+def quantities(campaign: Campaign) -> list[str]:
+    """The reported quantities: the objective, then the campaign's figures."""
+    return ["objective", *campaign.spec.figures]
+
+
+def grid_points(campaign: Campaign, rows: Sequence[dict[str, Any]]) -> list[tuple[tuple, list[dict[str, Any]]]]:
+    """The rows grouped by grid point (the grid keys' values), in run order."""
+    keys = [k for axis in campaign.spec.grid for k in axis.names]
+    groups: dict[tuple, list[dict[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault(tuple(row[k] for k in keys), []).append(row)
+    return list(groups.items())

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from convexguid.sizes import DEFAULT_MEMORY_LIMIT_BYTES, SizeEstimate, check_size
 from convexguid.spec.common import ProblemBase
@@ -25,6 +25,18 @@ if TYPE_CHECKING:
     from convexguid.scp.engine import IterationRecord
     from convexguid.scp.verified import PlanningSetup
     from convexguid.solution import Figures, Solution
+
+class Planner(Protocol):
+    """What a family may ask of the rest of convexguid without importing it (a family that flies another problem
+    file's plan, such as ``lpmpc``'s nominal, loads and plans it through this; the registry, which imports every
+    family, is never imported by one). :mod:`convexguid.api` passes its own to every hook that takes one."""
+
+    def load(self, path: str | PathLike[str], overrides: tuple[str, ...] | list[str] = ()) -> ProblemBase:
+        """The problem file ``path`` of any family, with ``overrides`` (``convexguid.load_problem``)."""
+
+    def solve(self, spec: ProblemBase) -> Solution:
+        """``spec`` planned (or simulated) and verified (``convexguid.solve``)."""
+
 
 @dataclass(frozen=True)
 class Family:
@@ -37,10 +49,11 @@ class Family:
     spec_model : type of ProblemBase
         Pydantic model of the problem file (its ``family`` field is ``Literal[name]``).
     solve : callable
-        ``solve(spec, log) -> Solution``; for a simulated family, the closed-loop simulation.
+        ``solve(spec, log, planner) -> Solution``; for a simulated family, the closed-loop simulation. ``planner``
+        (a :class:`Planner`) is for a family that needs another problem file's plan; the others ignore it.
     plot : callable
         ``plot(solution, out_dir, save) -> list[Path]``, ``save`` the shared figure writer
-        (:func:`convexguid.report.plots.save_figure`); imports matplotlib only when called.
+        (:func:`convexguid.figure_files.save_figure`); imports matplotlib only when called.
     verification_method : str
         How the solution is checked, as the report words it ("Dense verification (N points, <this>)").
     figures : type of Figures
@@ -63,7 +76,15 @@ class Family:
         ``timing_section(spec, solution) -> list[str]``: markdown of the case's compute times for the validation
         timings file (:mod:`convexguid.report.timings`, not committed), e.g. LPMPC update times. None: nothing.
     bench : callable or None
-        ``bench(problem_path, args) -> int`` (exit code) for ``convexguid bench``; None if the family has none.
+        ``bench(spec, args, planner) -> int`` (exit code) for ``convexguid bench`` on the loaded problem ``spec``
+        (``spec.source`` is its file); None if the family has none.
+        ``args.nodes`` is None unless the command line gave ``--nodes`` (the family picks its own default).
+    console_header : callable or None
+        ``console_header(spec) -> str``: the line the command line prints before a run (unless ``--quiet``),
+        e.g. the simulated time and step. None: none.
+    console_details : callable or None
+        ``console_details(solution) -> list[str]``: lines the command line prints after the run, before the result
+        block (unless ``--quiet``), e.g. one line per case of a sweep. None: none.
     independent_optimum : callable or None
         ``independent_optimum(spec, solution, starts) -> IndependentOptimum`` (:mod:`convexguid.reference`): the
         best objective an independent method reaches on the problem ``solution`` solved (IPOPT on the same NLP from
@@ -80,7 +101,7 @@ class Family:
 
     name: str
     spec_model: type[ProblemBase]
-    solve: Callable[[ProblemBase, Callable[[IterationRecord], None] | None], Solution]
+    solve: Callable[[ProblemBase, Callable[[IterationRecord], None] | None, Planner], Solution]
     plot: Callable[[Solution, Path], list[Path]]
     verification_method: str
     figures: type[Figures]
@@ -89,7 +110,9 @@ class Family:
     planning_setup: Callable[[ProblemBase], PlanningSetup] | None = None
     report_section: Callable[[ProblemBase, Solution], list[str]] | None = None
     timing_section: Callable[[ProblemBase, Solution], list[str]] | None = None
-    bench: Callable[[str | PathLike[str], argparse.Namespace], int] | None = None
+    bench: Callable[[ProblemBase, argparse.Namespace, Planner], int] | None = None
+    console_header: Callable[[ProblemBase], str] | None = None
+    console_details: Callable[[Solution], list[str]] | None = None
     independent_optimum: Callable[[ProblemBase, Solution, int], IndependentOptimum] | None = None
     estimate_size: Callable[[ProblemBase], SizeEstimate] | None = None
     memory_limit_bytes: float = DEFAULT_MEMORY_LIMIT_BYTES

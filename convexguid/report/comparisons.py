@@ -26,7 +26,6 @@ from dataclasses import dataclass
 
 from convexguid.errors import SpecError
 from convexguid.families import get_family
-from convexguid.families.quaternion_attitude.figures import QuaternionAttitudeFigures
 from convexguid.solution import Solution
 from convexguid.spec import ProblemSpec
 
@@ -111,12 +110,12 @@ def _multicone_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]:
         text.append(f"The SCP's minimum-time plan is {100 * cut:.1f}% shorter than the path-transfer plan (the paper "
                     "reports path transfer cutting the maneuver time by about 85% and the planning time by about 33% "
                     "against RDRP, which is not reimplemented here; the planning times are in the timings file).")
-    clearance = next((r.solution.figures for r in rows if isinstance(r.solution.figures, QuaternionAttitudeFigures)
-                      and r.solution.figures.eigenaxis_min_angle_deg), None)
+    clearance = next((r.solution for r in rows if _carried(r.solution, "eigenaxis_min_angle_deg")), None)
     if clearance is not None:
-        angles = clearance.eigenaxis_min_angle_deg
+        angles = clearance.figure("eigenaxis_min_angle_deg")
+        cones = clearance.figure("cones") if "cones" in clearance.figure_names() else ()
         text.append("The eigenaxis slew passes this close to each cone's direction: "
-                    + ", ".join(f"{k} {v:.3f} deg" for k, v in angles.items()) + _broken_cones(clearance) + ".")
+                    + ", ".join(f"{k} {v:.3f} deg" for k, v in angles.items()) + _broken_cones(angles, cones) + ".")
     text.append("Margins are measured on the dense SciPy re-propagation.")
     return ["", " ".join(text)]
 
@@ -132,11 +131,17 @@ def _multicone_timing_notes(roles: dict[str, Row], rows: list[Row]) -> list[str]
     return ["", " ".join(text)]
 
 
-def _broken_cones(figures: QuaternionAttitudeFigures) -> str:
-    """``; cones 1 and 2 (20 and 15 deg half-angles) are broken``: keep-out cones the eigenaxis slew enters."""
-    angles, cones = figures.eigenaxis_min_angle_deg, figures.cones
-    broken = [(i, c.half_angle_deg) for i, c in enumerate(cones, 1)
-              if c.keep_out and c.name in angles and angles[c.name] < c.half_angle_deg]
+def _carried(sol: Solution, name: str) -> bool:
+    """The solution carries the figure ``name`` and it is not empty."""
+    return name in sol.figure_names() and bool(sol.figure(name))
+
+
+def _broken_cones(angles: dict[str, float], cones: Sequence[dict]) -> str:
+    """``; cones 1 and 2 (20 and 15 deg half-angles) are broken``: keep-out cones (the summary's ``cones``: each
+    with ``name``, ``keep_out`` and ``half_angle_deg``) the eigenaxis slew enters, given its smallest angle to each
+    cone's direction by name."""
+    broken = [(i, c["half_angle_deg"]) for i, c in enumerate(cones, 1)
+              if c["keep_out"] and c["name"] in angles and angles[c["name"]] < c["half_angle_deg"]]
     if not cones:
         return ""
     if not broken:

@@ -12,7 +12,7 @@ The report holds only what is the same on every machine, so re-running on an unc
 unchanged: compute times and SCP iteration counts (which round-off moves by a few) go to the timings file beside
 it (:mod:`convexguid.report.timings`, not committed); a committed line is kept wherever the fresh one agrees with
 it within the reproduction tolerance (:func:`~convexguid.report.reproduction.reconcile`), and a committed picture
-wherever the fresh one shows the same (:func:`~convexguid.report.plots.keep_unchanged_pictures`).
+wherever the fresh one shows the same (:func:`~convexguid.figure_files.keep_unchanged_pictures`).
 :func:`check` solves the same cases and lists the lines that do not agree, writing nothing. Output
 paths are checked before anything is solved; each case's figures folder is replaced as a whole
 (:func:`~convexguid.outputs.staged_folder`) and every file is written atomically.
@@ -35,13 +35,15 @@ from pathlib import Path
 from convexguid.api import solve
 from convexguid.errors import SpecError
 from convexguid.families import get_family
+from convexguid.figure_files import keep_unchanged_pictures
 from convexguid.outputs import check_output_file, check_output_folder, staged_folder, write_text_atomic
+from convexguid.problem_files import load_problem
 from convexguid.report.comparisons import check_comparisons, comparison_sections, comparison_timings
-from convexguid.report.plots import keep_unchanged_pictures, plot_solution
+from convexguid.report.plots import plot_solution
 from convexguid.report.reproduction import LineDifference, reconcile
 from convexguid.report.timings import render_timings, timings_path
 from convexguid.solution import Solution
-from convexguid.spec import ProblemSpec, load_problem
+from convexguid.spec import ProblemSpec
 
 DEFAULT_PROBLEMS_DIR = Path("problems")
 DEFAULT_REPORT = Path("validation/REPORT.md")

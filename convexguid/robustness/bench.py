@@ -19,10 +19,10 @@ from typing import Any
 from convexguid.bench_common import environment_lines
 from convexguid.campaign.execute import dask_client, run_on_dask, run_serial
 from convexguid.outputs import write_text_atomic
+from convexguid.problem_files import load_problem
 from convexguid.robustness.instances import DEFAULT_SAMPLES, GENERATORS, roundoff_trials
 from convexguid.robustness.report import render
 from convexguid.robustness.trial import Trial, judged, run_trial
-from convexguid.spec import load_problem
 
 DEFAULT_OUTPUT = Path("validation/ROBUSTNESS.md")
 PACKAGES = ("numpy", "scipy", "clarabel", "daqp", "osqp", "casadi", "dask")

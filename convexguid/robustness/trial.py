@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from convexguid.bench_common import one_line
-from convexguid.spec.loader import parse_problem
+from convexguid.problem_files import parse_problem
 
 GAP_TOLERANCE = 1e-3
 """A plan within this relative gap above the best reference objective is optimal (0.1%)."""

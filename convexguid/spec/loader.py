@@ -1,4 +1,7 @@
-"""Read problem YAML files, apply ``--set`` overrides, validate by family.
+"""Read problem YAML files, apply ``--set`` overrides, validate with a family's model.
+
+Which model a file's ``family`` names is the registry's business (:mod:`convexguid.problem_files` reads a problem
+file by its family); this module knows only the shared base model, so the families' spec models can import it.
 
 Every problem reaches the user as a :class:`~convexguid.errors.SpecError` with a
 one-line message ``<file>: <dotted.key.path>: <what is wrong> (got <value>); <what
@@ -120,31 +123,6 @@ def _key_text(key: object) -> str:
     return text if text and text.isprintable() and not any(c.isspace() for c in text) else value_text(key)
 
 
-def load_problem(path: str | PathLike[str], overrides: Sequence[str] = ()) -> ProblemSpec:
-    """Read, override and validate a problem YAML file.
-
-    Parameters
-    ----------
-    path : str or path-like
-        Problem file.
-    overrides : sequence of str
-        ``dotted.key.path=value`` strings applied in order (see :func:`apply_overrides`).
-
-    Returns
-    -------
-    ProblemSpec
-        The validated problem of the file's family; ``.source`` is ``str(path)``.
-
-    Raises
-    ------
-    SpecError
-        If the file cannot be read or parsed, an override does not apply, or validation fails.
-    """
-    source = str(path)
-    data = read_yaml_mapping(path, "a problem file is a mapping of keys such as name, family, spacecraft")
-    return parse_problem(apply_overrides(data, overrides, source), source)
-
-
 def read_yaml_mapping(path: str | PathLike[str], hint: str) -> dict[str, Any]:
     """Read a YAML file whose top level is a mapping (duplicate keys rejected).
 
@@ -259,39 +237,26 @@ def value_at(data: Any, key: str) -> Any:
     return node
 
 
-def parse_problem(data: Mapping[str, Any], source: str = "<dict>") -> ProblemSpec:
-    """Validate raw problem data with the model of its ``family``.
+def with_overrides(spec: ProblemSpec, overrides: Sequence[str]) -> ProblemSpec:
+    """``spec`` validated again, by its own model, with ``overrides`` applied to the data it was made from (a
+    file's or a dict's: the file is not read again).
 
-    Parameters
-    ----------
-    data : mapping
-        Raw problem data, as read from YAML.
-    source : str
-        File name used in error messages and stored as ``.source``.
+    Raises
+    ------
+    SpecError
+        If an override does not apply or the result is invalid.
+    """
+    return validate_as(type(spec), apply_overrides(spec._data, overrides, spec.source), spec.source)
 
-    Returns
-    -------
-    ProblemSpec
-        Instance of the ``spec_model`` of the family named by ``data["family"]`` (see :mod:`convexguid.families`).
+
+def validate_as(model: type[ProblemBase], data: Mapping[str, Any], source: str) -> ProblemSpec:
+    """``data`` validated by ``model`` (a family's spec model), with ``.source`` set to ``source``.
 
     Raises
     ------
     SpecError
         One line naming the first problem (and how many more there are).
     """
-    from convexguid.families import FAMILIES  # here, not at the top: the families' spec models import this package
-
-    known = ", ".join(FAMILIES)
-    if not isinstance(data, Mapping):
-        raise SpecError(f"{source}: top level is not a mapping (got {value_text(data)}); "
-                        "give a mapping of keys such as name, family, spacecraft")
-    if "family" not in data:
-        raise SpecError(f"{source}: family: missing required key; known families: {known}")
-    family = data["family"]
-    model = FAMILIES[family].spec_model if isinstance(family, str) and family in FAMILIES else None
-    if model is None:
-        raise SpecError(f"{source}: family: unknown family (got {value_text(family)}); "
-                        f"known families: {known}")
     try:
         spec = model.model_validate(dict(data))
     except ValidationError as exc:
@@ -299,18 +264,6 @@ def parse_problem(data: Mapping[str, Any], source: str = "<dict>") -> ProblemSpe
     spec._source = source
     spec._data = copy.deepcopy(dict(data))
     return spec
-
-
-def with_overrides(spec: ProblemSpec, overrides: Sequence[str]) -> ProblemSpec:
-    """``spec`` validated again with ``overrides`` applied to the data it was made from (a file's or a dict's:
-    the file is not read again).
-
-    Raises
-    ------
-    SpecError
-        If an override does not apply or the result is invalid.
-    """
-    return parse_problem(apply_overrides(spec._data, overrides, spec.source), spec.source)
 
 
 def describe_validation_error(exc: ValidationError, model: type[BaseModel]) -> str:

@@ -10,7 +10,7 @@ of degree :math:`\\le 2N - 2`, and with it :math:`x(1) = x(-1) + \\sum_k w_k \\d
 
 This is the layout of Garg et al., whose collocation equations have the costate-mapping property: the
 terminal sensitivity to a control at node :math:`k` is :math:`w_k \\Phi(t_f, t_k) B_k` to spectral accuracy,
-which the energy-optimal correction of :mod:`convexguid.control.lpmpc` relies on.
+which the energy-optimal correction of :mod:`convexguid.families.lpmpc.controller` relies on.
 
 References
 ----------

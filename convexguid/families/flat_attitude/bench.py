@@ -25,14 +25,17 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench_common import FLAT_DEFAULT_NODES, cell, environment_lines, markdown_grid, one_line
+from convexguid.bench_common import cell, environment_lines, markdown_grid, one_line
 from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
 from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt
 from convexguid.outputs import write_text_atomic
 from convexguid.reference import casadi_available
 from convexguid.scp.engine import SCPResult, solve_scp
 from convexguid.scp.problem import SCPSettings
-from convexguid.spec import load_problem
+from convexguid.spec import with_overrides
+
+DEFAULT_NODES = (16, 32, 64, 128)
+"""Polynomial degrees :math:`N` ``convexguid bench`` times when ``--nodes`` is not given."""
 
 IPOPT_TOLERANCE = 1e-8
 """IPOPT's ``tol`` in the benchmark (tighter than the SCP's, so IPOPT's objective is the reference)."""
@@ -113,14 +116,14 @@ NLP_VARIANTS = (("[nodes]", True), ("[+checks]", False))
 """The two NLPs benched: path constraints at the nodes only (the paper's), and also at the check points (ours)."""
 
 
-def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, backends: Sequence[str],
+def bench_nodes(spec, nodes: int, repeat: int, backends: Sequence[str],
                 with_ipopt: bool) -> list[BenchRow]:
     """Benchmark rows of one grid size, for each NLP variant: one per SCP backend, then IPOPT (if ``with_ipopt``).
 
     Parameters
     ----------
-    problem_path : str or path-like
-        ``flat_attitude`` problem file; ``discretization.nodes`` is overridden with ``nodes``.
+    spec : FlatAttitudeProblem
+        The loaded ``flat_attitude`` problem; ``discretization.nodes`` is overridden with ``nodes``.
     nodes : int
         Polynomial degree :math:`N` (:math:`N + 1` nodes).
     repeat : int
@@ -140,11 +143,11 @@ def bench_nodes(problem_path: str | PathLike[str], nodes: int, repeat: int, back
     for label, nodes_only in NLP_VARIANTS:
         overrides = [f"discretization.nodes={nodes}"] + (["discretization.check_points_per_interval=0"]
                                                          if nodes_only else [])
-        spec = load_problem(problem_path, overrides)
-        problem = build_problem(spec)
+        variant = with_overrides(spec, overrides)
+        problem = build_problem(variant)
         program = FlatAttitudeProgram(problem)
         x0 = program.initial_guess()
-        scp = [_scp_row(nodes, f"{backend} {label}", program, SCPSettings.from_spec(spec.solver, backend=backend),
+        scp = [_scp_row(nodes, f"{backend} {label}", program, SCPSettings.from_spec(variant.solver, backend=backend),
                         x0, repeat) for backend in backends]
         if with_ipopt:
             ipopt = _ipopt_row(nodes, label, problem, x0, repeat, nodes_only)
@@ -170,10 +173,10 @@ def _markdown_table(rows: Sequence[BenchRow]) -> str:
     return markdown_grid(COLUMNS, align, [r.cells() for r in rows])
 
 
-def _command(problem_path: str | PathLike[str], nodes_list: Sequence[int], repeat: int,
+def _command(problem_path: str, nodes_list: Sequence[int], repeat: int,
              backends: Sequence[str], output_path: str | PathLike[str] | None) -> str:
     """The ``convexguid bench`` command line that reproduces this run."""
-    args = ["convexguid", "bench", str(problem_path), "--nodes", *map(str, nodes_list),
+    args = ["convexguid", "bench", problem_path, "--nodes", *map(str, nodes_list),
             "--repeat", str(repeat), "--backends", *backends]
     if output_path is not None:
         args += ["--output", str(output_path)]
@@ -199,7 +202,7 @@ def _notes(rows: Sequence[BenchRow]) -> list[str]:
     return lines
 
 
-def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLike[str],
+def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str,
               ipopt_note: str | None) -> str:
     header = [
         f"# convexguid benchmark: SCP vs IPOPT on `{Path(problem_path).name}`",
@@ -223,16 +226,16 @@ def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str | PathLi
     return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
 
 
-def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | None, repeat: int,
+def run_bench(spec, nodes_list: Sequence[int] | None, repeat: int,
               backends: Sequence[str], output_path: str | PathLike[str] | None = None) -> int:
-    """Time the SCP (each backend) and IPOPT on ``problem_path`` for every grid size in ``nodes_list``.
+    """Time the SCP (each backend) and IPOPT on ``spec`` for every grid size in ``nodes_list``.
 
     Parameters
     ----------
-    problem_path : str or path-like
-        ``flat_attitude`` problem file.
+    spec : FlatAttitudeProblem
+        The loaded ``flat_attitude`` problem (``spec.source``: its file, named in the table).
     nodes_list : sequence of int or None
-        Polynomial degrees :math:`N` to benchmark; ``None`` means :data:`FLAT_DEFAULT_NODES`.
+        Polynomial degrees :math:`N` to benchmark; ``None`` means :data:`DEFAULT_NODES`.
     repeat : int
         Timed runs per case; the fastest is reported.
     backends : sequence of str
@@ -246,7 +249,7 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
         Exit code: 0 if every row converged (IPOPT: succeeded), else 1.
     """
     if nodes_list is None:
-        nodes_list = FLAT_DEFAULT_NODES
+        nodes_list = DEFAULT_NODES
     with_ipopt = casadi_available()
     ipopt_note = None if with_ipopt else (
         "IPOPT column skipped: casadi is not installed (pip install 'convexguid[bench]').")
@@ -254,7 +257,7 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
         print(ipopt_note)
     rows: list[BenchRow] = []
     for nodes in nodes_list:
-        new = bench_nodes(problem_path, nodes, repeat, backends, with_ipopt)
+        new = bench_nodes(spec, nodes, repeat, backends, with_ipopt)
         rows += new
         for r in new:
             print(f"  done: N = {r.nodes:<4} {r.method:<14} {r.status}", flush=True)
@@ -263,13 +266,14 @@ def run_bench(problem_path: str | PathLike[str], nodes_list: Sequence[int] | Non
     for line in _notes(rows):
         print(line)
     if output_path is not None:
-        command = _command(problem_path, nodes_list, repeat, backends, output_path)
+        command = _command(spec.source, nodes_list, repeat, backends, output_path)
         path = Path(output_path)
-        write_text_atomic(path, _markdown(rows, command, problem_path, ipopt_note))
+        write_text_atomic(path, _markdown(rows, command, spec.source, ipopt_note))
         print(f"table written to {path}")
     return 0 if all(r.ok for r in rows) else 1
 
 
-def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
-    """``convexguid bench`` on a ``flat_attitude`` file: :func:`run_bench` with the command line's arguments."""
-    return run_bench(problem_path, args.nodes, args.repeat, args.backends, args.output)
+def bench_command(spec, args: argparse.Namespace, planner: object = None) -> int:
+    """``convexguid bench`` on a ``flat_attitude`` file: :func:`run_bench` with the command line's arguments
+    (``planner`` is unused: the benchmark plans this problem only)."""
+    return run_bench(spec, args.nodes, args.repeat, args.backends, args.output)

@@ -197,8 +197,11 @@ def planning_setup(spec) -> PlanningSetup:
                          FlatAttitudeChecker(spec.verification))
 
 
-def solve_flat_attitude(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
-    """Plan, verify and summarise a ``flat_attitude`` problem (see the module docstring)."""
+def solve_flat_attitude(spec, log: Callable[[IterationRecord], None] | None = None,
+                        planner: object = None) -> Solution:
+    """Plan, verify and summarise a ``flat_attitude`` problem (see the module docstring).
+
+    ``planner`` is unused (the family hook's signature: this family plans no other problem file)."""
     start = time.perf_counter()
     outcome = planning_setup(spec).solve(log)
     problem, x = outcome.program.problem, outcome.x

@@ -3,8 +3,9 @@
 Simulated, not planned: ``convexguid simulate`` solves and verifies the nominal (another problem file),
 then flies it closed loop. Modules: ``spec`` (problem file), ``scenario`` (nominal in MRPs, laws, runs),
 ``solve`` (single case, Monte Carlo on a process pool, verification, summary), ``figures``, ``plots``,
-``report`` (the paper's Tables 2-4 beside ours) and ``bench`` (update times of LPMPC and LQR).
-The control laws live in :mod:`convexguid.control` (``lpmpc``, ``lpmpc_tracker``, ``lqr``).
+``report`` (the paper's Tables 2-4 beside ours) and ``bench`` (update times of LPMPC and LQR); the control laws
+``controller`` (LPMPC's terminal map and corrections), ``tracker`` (LPMPC in closed loop) and ``lqr``, and
+``tracking`` (the MRP plant, sensors and the fixed-step closed loop they fly in).
 """
 
 from __future__ import annotations
@@ -14,11 +15,14 @@ from convexguid.families.lpmpc.figures import LpmpcFigures
 from convexguid.families.lpmpc.spec import LpmpcProblem
 
 
-def _solve(spec, log=None):
-    """Simulate (``log`` is unused: the SCP iterations of the nominal are not shown)."""
+def _solve(spec, log, planner):
+    """Simulate, the nominal planned by ``planner`` (``log`` is unused: the nominal's SCP iterations are not shown).
+
+    The simulation modules are imported here, at the first run: loading a problem file stays light.
+    """
     from convexguid.families.lpmpc.solve import simulate_lpmpc
 
-    return simulate_lpmpc(spec)
+    return simulate_lpmpc(spec, planner)
 
 
 FAMILY = Family(

@@ -15,21 +15,19 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import replace
-from os import PathLike
 from pathlib import Path
 
 import numpy as np
 
-from convexguid.api import check_resolved
 from convexguid.bench_common import environment_lines, markdown_grid
-from convexguid.control.lpmpc import box_constrained_correction, terminal_map
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices
 from convexguid.errors import SpecError
+from convexguid.families.base import Planner
+from convexguid.families.lpmpc.controller import box_constrained_correction, terminal_map
 from convexguid.families.lpmpc.scenario import fly_monte_carlo_run
 from convexguid.families.lpmpc.solve import build_scenario
 from convexguid.families.lpmpc.timing import median_ms, update_times_ms
 from convexguid.solution import write_text_atomic
-from convexguid.spec import load_problem
 from convexguid.transcription.lgr import RadauGrid
 
 BENCH_NODES = (8, 10, 12)
@@ -76,19 +74,19 @@ def _pair_row(label: str, sc, seeds, euler_std: float, rate_std: float) -> list[
             f"{np.mean([r['run_time_s'] for r in results]):.3f}"]
 
 
-def run_lpmpc_bench(problem_path: str | PathLike[str], repeat: int, runs: int, output: Path | None) -> int:
-    spec = load_problem(problem_path)
-    check_resolved(spec, overridable=False)  # the nominal's final time must not wait for another case's result
-    scenario, nominal = build_scenario(spec)
+def run_lpmpc_bench(spec, planner: Planner, repeat: int, runs: int, output: Path | None) -> int:
+    """Time the updates and compare the corrections on the loaded ``lpmpc`` problem ``spec`` (its nominal planned
+    by ``planner``); print the markdown and write it to ``output`` if given."""
+    scenario, nominal = build_scenario(spec, planner)
     if scenario is None:
-        raise SpecError(f"{problem_path}: the nominal plan is {nominal.status}: {nominal.message}")
+        raise SpecError(f"{spec.source}: the nominal plan is {nominal.status}: {nominal.message}")
     times = update_times_ms(scenario, list(BENCH_NODES), repeat=20 * repeat)
     times["lpmpc_n8_box_qp"] = _box_update_ms(scenario, 20 * repeat)
     update = markdown_grid(["update", "median [ms]"], ["---", "---:"], [[k, f"{v:.3g}"] for k, v in times.items()])
     pair = markdown_grid(["LPMPC correction", "runs", "runs leaving the box (closed form)", "mean energy [N^2 m^2 s]",
                           "mean final angle error [deg]", "mean final rate error [deg/s]", "mean run time [s]"],
                          ["---"] + ["---:"] * 6, _monte_carlo_pair(spec, scenario, runs))
-    text = "\n".join([f"# LPMPC benchmark: {spec.name}", "", f"Command: `convexguid bench {problem_path} "
+    text = "\n".join([f"# LPMPC benchmark: {spec.name}", "", f"Command: `convexguid bench {spec.source} "
                       f"--repeat {repeat} --runs {runs}`", "", *environment_lines(["numpy", "scipy", "clarabel"]), "",
                       "## One command update", "", update, "",
                       "## Closed-form against box-constrained correction (same seeds)", "", pair, ""])
@@ -98,6 +96,6 @@ def run_lpmpc_bench(problem_path: str | PathLike[str], repeat: int, runs: int, o
     return 0
 
 
-def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
+def bench_command(spec, args: argparse.Namespace, planner: Planner) -> int:
     """``convexguid bench`` on an ``lpmpc`` file (``--nodes`` and ``--backends`` do not apply)."""
-    return run_lpmpc_bench(problem_path, args.repeat, getattr(args, "runs", 20), args.output)
+    return run_lpmpc_bench(spec, planner, args.repeat, getattr(args, "runs", 20), args.output)

@@ -1,7 +1,8 @@
 """The flight scenario of an ``lpmpc`` problem: the verified nominal in MRPs, the plant, the laws, the runs.
 
-:func:`build_scenario` solves the nominal's problem file through the family registry (so it is planned
-and dense-verified like every plan) and samples its dense trajectory on the simulation grid.
+:func:`~convexguid.families.lpmpc.solve.build_scenario` solves the nominal's problem file through the planner the
+family's hook is given (so it is planned and dense-verified like every plan) and samples its dense trajectory on the
+simulation grid.
 :func:`fly_all` flies every law from one initial error; :func:`fly_monte_carlo_run` flies LPMPC and LQR
 tracking from one seeded random initial error (a picklable top-level function for the process pool).
 """
@@ -13,10 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.control.lpmpc_tracker import LpmpcSettings, LpmpcTracker
-from convexguid.control.lqr import LqrRegulator, LqrTracker
 from convexguid.dynamics.mrp_attitude import shortest_mrp
 from convexguid.errors import SpecError
+from convexguid.families.lpmpc.lqr import LqrRegulator, LqrTracker
+from convexguid.families.lpmpc.tracker import LpmpcSettings, LpmpcTracker
+from convexguid.families.lpmpc.tracking import DisturbanceTorque, Flight, Nominal, Sensors, fly
 from convexguid.rotations import (
     euler321_to_quat,
     mrp_to_quat,
@@ -24,7 +26,6 @@ from convexguid.rotations import (
     quat_to_euler321,
     quat_to_mrp,
 )
-from convexguid.sim.tracking import DisturbanceTorque, Flight, Nominal, Sensors, fly
 from convexguid.solution import Solution
 
 

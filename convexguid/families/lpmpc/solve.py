@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
-from convexguid.control.lpmpc_tracker import LpmpcSettings
 from convexguid.dynamics.mrp_attitude import shortest_mrp
 from convexguid.errors import SpecError
+from convexguid.families.base import Planner
 from convexguid.families.lpmpc.figures import ControllerRun, LpmpcFigures, MonteCarloFigures, Spread
 from convexguid.families.lpmpc.scenario import (
     Scenario,
@@ -30,12 +30,14 @@ from convexguid.families.lpmpc.scenario import (
     resolve_nominal_path,
 )
 from convexguid.families.lpmpc.timing import update_times_ms
+from convexguid.families.lpmpc.tracker import LpmpcSettings
+from convexguid.families.lpmpc.tracking import DisturbanceTorque, Sensors
 from convexguid.progress import report
 from convexguid.rotations import mrp_to_quat, quat_angle_between, quat_to_euler321, quat_to_mrp
 from convexguid.scp.problem import ProgramSize
-from convexguid.sim.tracking import DisturbanceTorque, Sensors
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
 from convexguid.solution import Solution, Trajectory, make_solution
+from convexguid.spec.loader import apply_overrides, read_yaml_mapping, value_at
 from convexguid.threads import pool_worker_init
 from convexguid.verify import ConstraintCheck, Verification
 
@@ -47,18 +49,17 @@ NOMINAL_FAMILIES = ("quaternion_attitude",)
 """Families whose plan LPMPC can fly: a dense trajectory with the quaternion, the body rates and the torque."""
 
 
-def load_nominal_spec(spec):
-    """The nominal's problem, with ``set`` applied and the final time from ``nominal.tf_s`` if given.
+def load_nominal_spec(spec, planner: Planner):
+    """The nominal's problem (loaded by ``planner``), with ``set`` applied and the final time from ``nominal.tf_s``
+    if given.
 
     Raises
     ------
     SpecError
         If the file is not a problem of :data:`NOMINAL_FAMILIES` (or is invalid).
     """
-    from convexguid.spec import load_problem
-
     path = resolve_nominal_path(spec)
-    nominal_spec = load_problem(path, spec.nominal.set)
+    nominal_spec = planner.load(path, spec.nominal.set)
     if nominal_spec.family not in NOMINAL_FAMILIES:
         raise SpecError(f"{spec.source}: nominal.problem: {path} is a {nominal_spec.family} problem (got "
                         f"{spec.nominal.problem!r}); give a problem file of the family "
@@ -68,7 +69,7 @@ def load_nominal_spec(spec):
     timed = [f"boundary.tf_s={spec.nominal.tf_s!r}"]
     if getattr(nominal_spec.boundary, "tf_from", None) is not None:
         timed.append("boundary.tf_from=null")
-    return load_problem(path, [*spec.nominal.set, *timed])
+    return planner.load(path, [*spec.nominal.set, *timed])
 
 
 BYTES_PER_LAW_STEP = 250
@@ -81,11 +82,16 @@ BYTES_PER_RUN = 4_000
 def estimate_size(spec) -> SizeEstimate:
     """Peak memory: the single case's flights (every law) and dense table, and the Monte Carlo's runs.
 
-    The step count needs the nominal's final time (``nominal.tf_s`` or the nominal file's ``boundary.tf_s``); a
-    minimum-time nominal's is known only after its solve, and then the estimate counts the runs alone.
+    The step count needs the nominal's final time (``nominal.tf_s``, or ``boundary.tf_s`` in the nominal's file
+    with ``nominal.set`` applied, read without validating it: the solve does that); a minimum-time nominal's is
+    known only after its solve, and then the estimate counts the runs alone.
     """
-    nominal = load_nominal_spec(spec)
-    tf = getattr(nominal.boundary, "tf_s", None)
+    tf = spec.nominal.tf_s
+    if tf is None:
+        path = resolve_nominal_path(spec)
+        data = apply_overrides(read_yaml_mapping(path, "a problem file is a mapping"), spec.nominal.set, str(path))
+        written = value_at(data, "boundary.tf_s")
+        tf = written if isinstance(written, (int, float)) and not isinstance(written, bool) else None
     steps = 0 if tf is None else round(tf / spec.simulation.dt_s) + 1
     laws = 1 + 2 * len(spec.lqr.r)
     single = steps * laws * BYTES_PER_LAW_STEP
@@ -104,19 +110,18 @@ def forbidden_angles_deg(scenario: Scenario, x: np.ndarray) -> dict[str, tuple[f
             for name, q, bound in scenario.forbidden}
 
 
-def build_scenario(spec) -> tuple[Scenario | None, Solution]:
-    """The scenario of ``spec`` and the nominal's solution (scenario None if the nominal is not verified)."""
-    from convexguid.api import solve
-
-    nominal_spec = load_nominal_spec(spec)
-    nominal_solution = solve(nominal_spec)
+def build_scenario(spec, planner: Planner) -> tuple[Scenario | None, Solution]:
+    """The scenario of ``spec`` and the nominal's solution, planned by ``planner`` (scenario None if the nominal is
+    not verified)."""
+    nominal_spec = load_nominal_spec(spec, planner)
+    nominal_solution = planner.solve(nominal_spec)
     if not nominal_solution.ok:
         return None, nominal_solution
     sc = nominal_spec.spacecraft
     final = nominal_spec.boundary.final
     target_sigma = short_mrp_of_quat(final.q)
     s = spec.lpmpc
-    written = _written_limits(spec)
+    written = _written_limits(spec, planner)
     scenario = Scenario(
         nominal=nominal_from_solution(nominal_solution, spec.simulation.dt_s),
         inertia=np.array(sc.inertia_matrix, dtype=float),
@@ -134,13 +139,11 @@ def build_scenario(spec) -> tuple[Scenario | None, Solution]:
     return scenario, nominal_solution
 
 
-def _written_limits(spec) -> dict[str, float]:
+def _written_limits(spec, planner: Planner) -> dict[str, float]:
     """The least angle (deg) to each forbidden attitude of the nominal's problem file as written, by name, before
     ``nominal.set``: a plan may be padded away from a limit (room for the closed loop), but the flight is held to
     the limit itself."""
-    from convexguid.spec import load_problem
-
-    written = load_problem(resolve_nominal_path(spec))
+    written = planner.load(resolve_nominal_path(spec))
     return {f.name: float(f.min_angle_deg) for f in getattr(written, "forbidden", ())}
 
 
@@ -150,10 +153,10 @@ def short_mrp_of_quat(q: np.ndarray) -> np.ndarray:
     return shortest_mrp(quat_to_mrp(q if q[3] >= 0 else -q))
 
 
-def simulate_lpmpc(spec) -> Solution:
-    """Run the ``lpmpc`` problem ``spec`` (see the module docstring)."""
+def simulate_lpmpc(spec, planner: Planner) -> Solution:
+    """Run the ``lpmpc`` problem ``spec``, its nominal planned by ``planner`` (see the module docstring)."""
     started = time.perf_counter()
-    scenario, nominal = build_scenario(spec)
+    scenario, nominal = build_scenario(spec, planner)
     base = {"nominal_problem": nominal.problem, "nominal_status": nominal.status,
             "nominal_energy_N2m2s": _nominal_energy(nominal)}
     if scenario is None:

@@ -12,11 +12,11 @@ import time
 
 import numpy as np
 
-from convexguid.control.lpmpc import energy_optimal_correction, terminal_map
-from convexguid.control.lqr import lqr_gain
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices
+from convexguid.families.lpmpc.controller import energy_optimal_correction, terminal_map
+from convexguid.families.lpmpc.lqr import lqr_gain
 from convexguid.families.lpmpc.scenario import Scenario
-from convexguid.sim.tracking import integrate
+from convexguid.families.lpmpc.tracking import integrate
 from convexguid.transcription.lgr import RadauGrid
 
 

@@ -1,20 +1,24 @@
 """Family ``potential_function``: closed-loop slew with forbidden-attitude avoidance (Guo, Li, Ma 2011).
 
-Simulated, not planned: ``convexguid simulate`` runs the controller (:mod:`convexguid.control.potential_function`)
-on the reaction-wheel plant (:mod:`convexguid.sim`). Modules here: ``spec`` (problem
-file), ``figures`` (summary figures of the simulation) and ``plots``.
+Simulated, not planned: ``convexguid simulate`` runs the controller (``controller``) on the reaction-wheel plant
+(``plant``) through ``runner`` (the problem file's simulation, checks and summary). Also here: ``spec`` (problem
+file), ``figures`` (summary figures of the simulation), ``console`` (what the command line prints) and ``plots``.
 """
 
 from __future__ import annotations
 
 from convexguid.families.base import Family, lazy
+from convexguid.families.potential_function.console import header, sweep_lines
 from convexguid.families.potential_function.figures import PotentialFunctionFigures
 from convexguid.families.potential_function.spec import PotentialFunctionProblem, estimate_size
 
 
-def _solve(spec, log=None):
-    """Simulate the closed loop (``log`` is unused: there are no SCP iterations)."""
-    from convexguid.sim.runner import simulate_problem
+def _solve(spec, log, planner):
+    """Simulate the closed loop (``log`` and ``planner`` are unused: no SCP iterations, no other problem's plan).
+
+    The simulation modules are imported here, at the first run: loading a problem file stays light.
+    """
+    from convexguid.families.potential_function.runner import simulate_problem
 
     return simulate_problem(spec)
 
@@ -27,6 +31,8 @@ FAMILY = Family(
     verification_method="closed-loop simulation",
     figures=PotentialFunctionFigures,
     simulated=True,
+    console_header=header,
+    console_details=sweep_lines,
     estimate_size=estimate_size,
     key_figures=(
         ("maneuver_time_1deg_s", "time to within 1 deg of the command, s"),

@@ -1,4 +1,4 @@
-"""Summary figures of a ``potential_function`` simulation (:mod:`convexguid.sim.runner`)."""
+"""Summary figures of a ``potential_function`` simulation (:mod:`convexguid.families.potential_function.runner`)."""
 
 from __future__ import annotations
 

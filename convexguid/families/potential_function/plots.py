@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from convexguid.sim.runner import sweep_column  # noqa: E402
+from convexguid.families.potential_function.runner import sweep_column  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
 Save = Callable[..., Path]
@@ -82,7 +82,7 @@ def plot_potential_function(solution: Solution, out_dir: Path, save: Save) -> li
     Parameters
     ----------
     solution : Solution
-        Result of :func:`convexguid.sim.runner.simulate_problem` (its figures a
+        Result of :func:`convexguid.families.potential_function.runner.simulate_problem` (its figures a
         :class:`~convexguid.families.potential_function.figures.PotentialFunctionFigures`).
     out_dir : Path
         Directory for the PNG files.

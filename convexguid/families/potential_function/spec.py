@@ -2,9 +2,9 @@ r"""Problem family ``potential_function``: closed-loop slew with forbidden-attit
 
 A reaction-wheel spacecraft is steered from ``boundary.initial`` to the inertially fixed ``boundary.command`` by
 the potential-function + backstepping controller of
-:class:`~convexguid.control.potential_function.PotentialFunctionController`, keeping its Euler-axis angle
+:class:`~convexguid.families.potential_function.controller.PotentialFunctionController`, keeping its Euler-axis angle
 :math:`\theta_b` to ``boundary.forbidden`` above ``gains.theta_m_deg``. The run is a simulation, not a plan:
-:func:`convexguid.sim.runner.simulate_problem` integrates it.
+:func:`convexguid.families.potential_function.runner.simulate_problem` integrates it.
 
 Quaternions are scalar-last ``[x, y, z, w]``, Hamilton product, body relative to inertial (the convention of
 :mod:`convexguid.rotations` and of the paper). **Non-unit input:** a quaternion whose norm is within
@@ -29,8 +29,8 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BeforeValidator, Field, model_validator
 
-from convexguid.control.potential_function import PotentialFunctionGains
 from convexguid.errors import SpecError
+from convexguid.families.potential_function.controller import PotentialFunctionGains
 from convexguid.rotations import quat_angle_between
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
 from convexguid.spec.common import (
@@ -180,7 +180,8 @@ class PotentialGains(SpecModel):
 
 
 class SimulationSettings(SpecModel):
-    """Fixed-step RK4 closed-loop simulation (zero-order-held torque, see :mod:`convexguid.sim.reaction_wheel`).
+    """Fixed-step RK4 closed-loop simulation (zero-order-held torque, see
+    :mod:`convexguid.families.potential_function.plant`).
 
     Attributes
     ----------

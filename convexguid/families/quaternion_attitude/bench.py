@@ -16,7 +16,7 @@ loaded with ``discretization.intervals = K``, ``method: scp``, ``initial_guess: 
 - ``scp energy``, ``ipopt energy``, ``ipopt energy @scp``: the same three for minimum energy at the fixed
   final time :data:`ENERGY_TF_FACTOR` times the SCP's minimum time of that ``K``.
 
-The path-transfer planner (:func:`convexguid.planners.path_transfer.plan_path_transfer`), which
+The path-transfer planner (:func:`convexguid.families.quaternion_attitude.path_transfer.plan_path_transfer`), which
 does not depend on :math:`K`, is timed once. Every case runs ``repeat`` times and the fastest run
 is reported. Run it as ``convexguid bench problems/wang_multicone_time.yaml --repeat 3`` or
 ``python -m convexguid.families.quaternion_attitude.bench problems/wang_multicone_time.yaml --repeat 3``.
@@ -33,17 +33,17 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench_common import FLAT_DEFAULT_NODES, best_of, cell, environment_lines, markdown_grid, one_line
+from convexguid.bench_common import best_of, cell, environment_lines, markdown_grid, one_line
+from convexguid.families.quaternion_attitude.path_transfer import plan_path_transfer
 from convexguid.families.quaternion_attitude.program import AttitudeCase, eigenaxis_start
 from convexguid.families.quaternion_attitude.solve import (
     build_case,
     path_transfer_problem,
     solve_quaternion_attitude,
 )
-from convexguid.planners.path_transfer import plan_path_transfer
 from convexguid.reference import casadi_available
 from convexguid.solution import Solution, write_text_atomic
-from convexguid.spec import load_problem
+from convexguid.spec import with_overrides
 
 DEFAULT_INTERVALS = (20, 30, 50, 80)
 """Hermite-Simpson interval counts benchmarked by default."""
@@ -124,13 +124,13 @@ def _failed(intervals: int | None, solver: str, objective: str, exc: Exception) 
     return AttitudeBenchRow(intervals, solver, objective, f"failed: {one_line(text)}", message=text)
 
 
-def _spec(problem_path: str | PathLike[str], intervals: int, tf: float | None = None):
-    """The file at ``intervals`` with SCP from the eigenaxis guess: minimum time, or minimum energy at ``tf``."""
+def _variant(spec, intervals: int, tf: float | None = None):
+    """``spec`` at ``intervals`` with SCP from the eigenaxis guess: minimum time, or minimum energy at ``tf``."""
     overrides = [f"discretization.intervals={intervals}", "method=scp", "initial_guess=eigenaxis",
                  "boundary.tf_min_time_factor=null", "boundary.tf_from=null"]  # the bench sets the final time
     overrides += ["objective=time", "boundary.tf_s=null"] if tf is None else ["objective=energy",
                                                                              f"boundary.tf_s={tf!r}"]
-    return load_problem(problem_path, overrides)
+    return with_overrides(spec, overrides)
 
 
 def _solution_nodes(sol: Solution) -> np.ndarray:
@@ -212,15 +212,15 @@ def _objective_rows(spec, objective: str, repeat: int, with_ipopt: bool) -> tupl
     return _with_gaps(rows), sol
 
 
-def bench_attitude_rows(problem_path: str | PathLike[str], intervals_list: Sequence[int] = DEFAULT_INTERVALS,
+def bench_attitude_rows(spec, intervals_list: Sequence[int] = DEFAULT_INTERVALS,
                         repeat: int = 3, with_ipopt: bool | None = None,
                         progress: bool = False) -> list[AttitudeBenchRow]:
     """Benchmark rows: ``path_transfer``, then per ``K`` the minimum-time and minimum-energy rows.
 
     Parameters
     ----------
-    problem_path : str or path-like
-        ``quaternion_attitude`` problem file (e.g. ``problems/wang_multicone_time.yaml``).
+    spec : QuaternionAttitudeProblem
+        The loaded ``quaternion_attitude`` problem (e.g. of ``problems/wang_multicone_time.yaml``).
     intervals_list : sequence of int
         Hermite-Simpson interval counts :math:`K`.
     repeat : int
@@ -240,9 +240,8 @@ def bench_attitude_rows(problem_path: str | PathLike[str], intervals_list: Seque
     ValueError
         If the file is not of the ``quaternion_attitude`` family.
     """
-    spec = load_problem(problem_path, [])
     if spec.family != "quaternion_attitude":
-        raise ValueError(f"{problem_path}: family {spec.family!r}, expected 'quaternion_attitude'")
+        raise ValueError(f"{spec.source}: family {spec.family!r}, expected 'quaternion_attitude'")
     with_ipopt = casadi_available() if with_ipopt is None else with_ipopt
 
     def report(new: list[AttitudeBenchRow]) -> list[AttitudeBenchRow]:
@@ -254,13 +253,13 @@ def bench_attitude_rows(problem_path: str | PathLike[str], intervals_list: Seque
 
     rows = report([_path_transfer_row(build_case(spec), repeat)])
     for K in intervals_list:
-        time_rows, sol = _objective_rows(_spec(problem_path, K), "time", repeat, with_ipopt)
+        time_rows, sol = _objective_rows(_variant(spec, K), "time", repeat, with_ipopt)
         rows += report(time_rows)
         if sol is None:
             rows += report([AttitudeBenchRow(K, _SCP, "energy", "skipped",
                                              message="the minimum-time SCP (which sets tf) did not converge")])
             continue
-        energy_rows, _ = _objective_rows(_spec(problem_path, K, ENERGY_TF_FACTOR * time_rows[0].tf_s), "energy",
+        energy_rows, _ = _objective_rows(_variant(spec, K, ENERGY_TF_FACTOR * time_rows[0].tf_s), "energy",
                                          repeat, with_ipopt)
         rows += report(energy_rows)
     return rows
@@ -341,13 +340,13 @@ def _notes(rows: Sequence[AttitudeBenchRow], target_s: float | None = None) -> l
     return lines
 
 
-def _command(problem_path: str | PathLike[str], intervals_list: Sequence[int], repeat: int,
+def _command(problem_path: str, intervals_list: Sequence[int], repeat: int,
              output: str | PathLike[str] | None) -> str:
-    args = ["convexguid", "bench", str(problem_path), "--nodes", *map(str, intervals_list), "--repeat", str(repeat)]
+    args = ["convexguid", "bench", problem_path, "--nodes", *map(str, intervals_list), "--repeat", str(repeat)]
     return shlex.join(args + (["--output", str(output)] if output is not None else []))
 
 
-def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str | PathLike[str],
+def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str,
                             intervals_list: Sequence[int], repeat: int, ipopt_note: str | None = None,
                             output: str | PathLike[str] | None = None) -> str:
     """The benchmark as a markdown document: machine, versions, threads, date, command, caption, table, notes."""
@@ -379,9 +378,10 @@ def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str 
     return "\n".join(header + ["", table, ""] + (footer + [""] if footer else []))
 
 
-def run_attitude_bench(problem_path: str | PathLike[str], intervals_list: Sequence[int] = DEFAULT_INTERVALS,
+def run_attitude_bench(spec, intervals_list: Sequence[int] = DEFAULT_INTERVALS,
                        repeat: int = 3, output: str | PathLike[str] | None = None) -> int:
-    """Run :func:`bench_attitude_rows`, print the markdown document, optionally write it to ``output``.
+    """Run :func:`bench_attitude_rows` on the loaded problem ``spec``, print the markdown document, optionally write
+    it to ``output``.
 
     Returns
     -------
@@ -392,8 +392,8 @@ def run_attitude_bench(problem_path: str | PathLike[str], intervals_list: Sequen
     with_ipopt = casadi_available()
     ipopt_note = None if with_ipopt else (
         "IPOPT rows skipped: casadi is not installed (pip install 'convexguid[bench]').")
-    rows = bench_attitude_rows(problem_path, intervals_list, repeat, with_ipopt, progress=True)
-    text = attitude_bench_markdown(rows, problem_path, intervals_list, repeat, ipopt_note, output)
+    rows = bench_attitude_rows(spec, intervals_list, repeat, with_ipopt, progress=True)
+    text = attitude_bench_markdown(rows, spec.source, intervals_list, repeat, ipopt_note, output)
     print()
     print(text, end="")
     if output is not None:
@@ -402,29 +402,11 @@ def run_attitude_bench(problem_path: str | PathLike[str], intervals_list: Sequen
     return 0 if all(r.ok for r in rows) else 1
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m convexguid.families.quaternion_attitude.bench PROBLEM [--nodes K ...] [--repeat N]
-    [--output FILE]``."""
-    parser = argparse.ArgumentParser(prog="python -m convexguid.families.quaternion_attitude.bench",
-                                     description=__doc__.split("\n")[0])
-    parser.add_argument("problem", nargs="?", type=Path, default=Path("problems/wang_multicone_time.yaml"))
-    parser.add_argument("--nodes", type=int, nargs="+", default=list(DEFAULT_INTERVALS),
-                        help="Hermite-Simpson interval counts K")
-    parser.add_argument("--repeat", type=int, default=3, help="timed runs per case (best is reported)")
-    parser.add_argument("--output", type=Path, help="also write the table (markdown) here")
-    args = parser.parse_args(argv)
-    return run_attitude_bench(args.problem, args.nodes, args.repeat, args.output)
-
-
-
-def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
+def bench_command(spec, args: argparse.Namespace, planner: object = None) -> int:
     """``convexguid bench`` on a ``quaternion_attitude`` file: ``--nodes`` are interval counts ``K``.
 
-    The command line's default ``--nodes`` (:data:`~convexguid.bench_common.FLAT_DEFAULT_NODES`, flat-attitude
-    degrees) means :data:`DEFAULT_INTERVALS`; ``--backends`` does not apply (the SCP uses the file's backend).
+    Without ``--nodes``, :data:`DEFAULT_INTERVALS`; ``--backends`` does not apply (the SCP uses the file's backend);
+    ``planner`` is unused (the benchmark plans this problem only).
     """
-    default = args.nodes is None or tuple(args.nodes) == FLAT_DEFAULT_NODES
-    return run_attitude_bench(problem_path, DEFAULT_INTERVALS if default else args.nodes, args.repeat, args.output)
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    intervals = DEFAULT_INTERVALS if args.nodes is None else args.nodes
+    return run_attitude_bench(spec, intervals, args.repeat, args.output)

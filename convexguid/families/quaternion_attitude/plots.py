@@ -33,8 +33,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from numpy.typing import ArrayLike, NDArray  # noqa: E402
 
+from convexguid.figure_files import write_figure  # noqa: E402
 from convexguid.geometry import eigenaxis_path  # noqa: E402
-from convexguid.report.plots import write_figure  # noqa: E402
 from convexguid.rotations import quat_conjugate, quat_rotate  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 from convexguid.verify import TORQUE_AXIS_CHECKS  # noqa: E402

@@ -19,6 +19,7 @@ import numpy as np
 
 from convexguid.dynamics.torque import TorqueCommand
 from convexguid.families.quaternion_attitude.figures import ConeGeometry, QuaternionAttitudeFigures
+from convexguid.families.quaternion_attitude.path_transfer import PathTransferProblem, plan_path_transfer
 from convexguid.families.quaternion_attitude.program import (
     AttitudeCase,
     Forbidden,
@@ -27,7 +28,6 @@ from convexguid.families.quaternion_attitude.program import (
     eigenaxis_start,
 )
 from convexguid.geometry import PointingCone
-from convexguid.planners.path_transfer import PathTransferProblem, plan_path_transfer
 from convexguid.rotations import quat_angle_between, quat_sign_continuous
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.scp.state import IterationRecord
@@ -224,8 +224,11 @@ def cone_geometry(case: AttitudeCase) -> tuple[ConeGeometry, ...]:
     return tuple(ConeGeometry.of(c) for c in case.cones)
 
 
-def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
-    """Plan with ``spec.method`` (``scp`` or ``path_transfer``), verify, and summarise."""
+def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | None = None,
+                              planner: object = None) -> Solution:
+    """Plan with ``spec.method`` (``scp`` or ``path_transfer``), verify, and summarise.
+
+    ``planner`` is unused (the family hook's signature: this family plans no other problem file)."""
     start = time.perf_counter()
     case = build_case(spec)
     figures = QuaternionAttitudeFigures(eigenaxis_min_angle_deg=eigenaxis_cone_clearance(case),

@@ -46,7 +46,6 @@ from convexguid.reference import casadi_available
 from convexguid.scp.engine import solve_scp
 from convexguid.scp.problem import SCPSettings
 from convexguid.solution import write_text_atomic
-from convexguid.spec import load_problem
 
 IPOPT_TOLERANCE = 1e-10
 """IPOPT's ``tol`` in the benchmark (tighter than the SCP's, so IPOPT's burn time is the NLP reference)."""
@@ -150,14 +149,14 @@ def _ipopt_row(program: ArcsProgram, repeat: int) -> RendezvousBenchRow:
                               message="" if best.success else f"IPOPT returned {best.status}")
 
 
-def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
+def bench_rendezvous_rows(spec, repeat: int,
                           with_ipopt: bool | None = None) -> list[RendezvousBenchRow]:
     """Benchmark rows ``lcvx``, its cvxpy statement, ``scp_arcs`` and (if ``with_ipopt``) ``ipopt``.
 
     Parameters
     ----------
-    problem_path : str or path-like
-        ``rendezvous`` problem file (e.g. ``problems/wang2003_rendezvous.yaml``).
+    spec : RendezvousProblem
+        The loaded ``rendezvous`` problem (e.g. of ``problems/wang2003_rendezvous.yaml``).
     repeat : int
         Timed runs per method; the fastest (by wall time) is kept.
     with_ipopt : bool, optional
@@ -173,9 +172,8 @@ def bench_rendezvous_rows(problem_path: str | PathLike[str], repeat: int,
     ValueError
         If the file is not of the ``rendezvous`` family.
     """
-    spec = load_problem(problem_path, [])
     if spec.family != "rendezvous":
-        raise ValueError(f"{problem_path}: family {spec.family!r}, expected 'rendezvous'")
+        raise ValueError(f"{spec.source}: family {spec.family!r}, expected 'rendezvous'")
     case = build_case(spec)
     disc, s = spec.discretization, spec.solver
     burns = planning_setup(spec).program.layout.burns if disc.auto_burns else disc.burns
@@ -224,11 +222,11 @@ def _markdown_table(rows: Sequence[RendezvousBenchRow]) -> str:
     return markdown_grid(COLUMNS, align, [r.cells(reference) for r in rows])
 
 
-def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: str | PathLike[str], repeat: int,
+def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: str, repeat: int,
                               grid_steps: int | None = None, ipopt_note: str | None = None,
                               output: str | PathLike[str] | None = None) -> str:
     """The benchmark as a markdown document: machine, versions, date, command, caption, table, notes."""
-    args = ["python", "-m", "convexguid.families.rendezvous.bench", str(problem_path), "--repeat", str(repeat)]
+    args = ["convexguid", "bench", problem_path, "--repeat", str(repeat)]
     command = shlex.join(args + (["--output", str(output)] if output is not None else []))
     steps = "the problem's `grid_steps`" if grid_steps is None else f"{grid_steps} steps"
     header = [
@@ -258,14 +256,14 @@ def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: 
     return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
 
 
-def run_rendezvous_bench(problem_path: str | PathLike[str], repeat: int,
+def run_rendezvous_bench(spec, repeat: int,
                          output: str | PathLike[str] | None = None) -> int:
     """Time ``lcvx`` (condensed and in cvxpy), ``scp_arcs`` and IPOPT on one problem; print, optionally save.
 
     Parameters
     ----------
-    problem_path : str or path-like
-        ``rendezvous`` problem file.
+    spec : RendezvousProblem
+        The loaded ``rendezvous`` problem (``spec.source``: its file, named in the document).
     repeat : int
         Timed runs per method; the fastest is reported.
     output : str or path-like, optional
@@ -280,9 +278,8 @@ def run_rendezvous_bench(problem_path: str | PathLike[str], repeat: int,
     with_ipopt = casadi_available()
     ipopt_note = None if with_ipopt else (
         "IPOPT row skipped: casadi is not installed (pip install 'convexguid[bench]').")
-    rows = bench_rendezvous_rows(problem_path, repeat, with_ipopt)
-    steps = load_problem(problem_path, []).discretization.grid_steps
-    text = rendezvous_bench_markdown(rows, problem_path, repeat, steps, ipopt_note, output)
+    rows = bench_rendezvous_rows(spec, repeat, with_ipopt)
+    text = rendezvous_bench_markdown(rows, spec.source, repeat, spec.discretization.grid_steps, ipopt_note, output)
     print(text, end="")
     if output is not None:
         write_text_atomic(Path(output), text)
@@ -290,21 +287,7 @@ def run_rendezvous_bench(problem_path: str | PathLike[str], repeat: int,
     return 0 if all(r.ok for r in rows) else 1
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m convexguid.families.rendezvous.bench PROBLEM [--repeat N] [--output FILE]``."""
-    parser = argparse.ArgumentParser(prog="python -m convexguid.families.rendezvous.bench",
-                                     description=__doc__.split("\n")[0])
-    parser.add_argument("problem", nargs="?", type=Path, default=Path("problems/wang2003_rendezvous.yaml"))
-    parser.add_argument("--repeat", type=int, default=3, help="timed runs per method (best is reported)")
-    parser.add_argument("--output", type=Path, help="also write the table (markdown) here")
-    args = parser.parse_args(argv)
-    return run_rendezvous_bench(args.problem, args.repeat, args.output)
-
-
-
-def bench_command(problem_path: str | PathLike[str], args: argparse.Namespace) -> int:
-    """``convexguid bench`` on a ``rendezvous`` file (``--nodes`` and ``--backends`` do not apply)."""
-    return run_rendezvous_bench(problem_path, args.repeat, args.output)
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+def bench_command(spec, args: argparse.Namespace, planner: object = None) -> int:
+    """``convexguid bench`` on a ``rendezvous`` file (``--nodes`` and ``--backends`` do not apply; ``planner`` is
+    unused: the benchmark plans this problem only)."""
+    return run_rendezvous_bench(spec, args.repeat, args.output)

@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from convexguid.families.rendezvous.case import AXES  # noqa: E402
-from convexguid.report.plots import write_figure  # noqa: E402
+from convexguid.figure_files import write_figure  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
 

@@ -35,8 +35,11 @@ GAP_TOLERANCE = 1e-3
 """An ``scp_arcs`` plan more than this far (relative) above the ``lcvx`` optimum says so in its message."""
 
 
-def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None) -> Solution:
+def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None,
+                     planner: object = None) -> Solution:
     """Plan with ``spec.method``, verify by propagation, and (``scp_arcs``) certify against ``lcvx``.
+
+    ``planner`` is unused (the family hook's signature: this family plans no other problem file).
 
     ``scp_arcs`` with the ``lcvx`` solution at hand (``certify``, or ``burns: auto``) starts from its burn
     structure when the numbers of burns agree (:meth:`ArcsProgram.following`): the convex optimum on the grid

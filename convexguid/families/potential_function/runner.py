@@ -1,12 +1,13 @@
 r"""Run a ``potential_function`` problem: closed-loop simulation, figures and checks as a :class:`Solution`.
 
-The base case (the ``gains`` section) is simulated with
-:func:`convexguid.sim.reaction_wheel.simulate`; with a ``sweep`` section every ``theta_m`` of the sweep is
-simulated too (a case equal to the base case reuses its run). The result is packed into the
-:class:`~convexguid.solution.Solution` of the summary-JSON contract (docs/cli.md):
+The base case (the ``gains`` section) is simulated with :func:`~convexguid.families.potential_function.plant.simulate`;
+with a ``sweep`` section every ``theta_m`` of the sweep is simulated too (a case equal to the base case reuses its
+run). The result is packed into the :class:`~convexguid.solution.Solution` of the summary-JSON contract
+(docs/cli.md):
 
 * ``status``: ``converged`` when every run reaches the command, i.e. ends with an attitude error below
-  :data:`ARRIVAL_TOL_DEG` (then :func:`~convexguid.sim.reaction_wheel.settling_time` for that band exists);
+  :data:`ARRIVAL_TOL_DEG` (then :func:`~convexguid.families.potential_function.plant.settling_time` for that band
+  exists);
   ``max_iterations`` when a run is still outside the band at ``t_final_s`` (the simulated time ran out, the
   analogue of an iteration limit).
 * ``objective``: the control energy :math:`\int \|u\|^2 dt` (N^2 m^2 s) of the base run; ``iterations``: its
@@ -36,20 +37,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from convexguid.control.potential_function import PotentialFunctionController
+from convexguid.dynamics.disturbance import guo2011_disturbance, no_disturbance
 from convexguid.errors import SpecError
+from convexguid.families.potential_function.controller import PotentialFunctionController
 from convexguid.families.potential_function.figures import PotentialFunctionFigures, SweepCaseFigures
+from convexguid.families.potential_function.plant import ManeuverMetrics, SimulationResult, maneuver_metrics, simulate
 from convexguid.families.potential_function.spec import PotentialFunctionProblem
 from convexguid.rotations import quat_angle_between
 from convexguid.scp.problem import ProgramSize
-from convexguid.sim.reaction_wheel import (
-    ManeuverMetrics,
-    SimulationResult,
-    guo2011_disturbance,
-    maneuver_metrics,
-    no_disturbance,
-    simulate,
-)
 from convexguid.solution import Solution, Trajectory, _finite, make_solution
 from convexguid.verify import ConstraintCheck, Verification
 
@@ -202,7 +197,7 @@ def simulate_problem(spec: PotentialFunctionProblem) -> Solution:
     Parameters
     ----------
     spec : PotentialFunctionProblem
-        Validated problem (see :func:`convexguid.spec.load_problem`).
+        Validated problem (see :func:`convexguid.problem_files.load_problem`).
 
     Returns
     -------

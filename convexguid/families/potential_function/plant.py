@@ -33,15 +33,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from convexguid.checks import finite_vector, inertia_matrix, unit_vector
-from convexguid.control.potential_function import ControlInfo, _cross
+from convexguid.dynamics.disturbance import guo2011_disturbance
 from convexguid.errors import SpecError
+from convexguid.families.potential_function.controller import ControlInfo
 from convexguid.progress import report
-from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_normalize
+from convexguid.rotations import axis_angle_to_quat, cross3, quat_angle_between, quat_normalize
 
 __all__ = [
-    "GUO2011_INERTIA", "GUO2011_Q0", "GUO2011_Q_COMMAND", "GUO2011_Q_FORBIDDEN", "guo2011_disturbance",
-    "no_disturbance", "quaternion_rate", "settling_time", "SimulationResult", "ManeuverMetrics", "simulate",
-    "maneuver_metrics",
+    "GUO2011_INERTIA", "GUO2011_Q0", "GUO2011_Q_COMMAND", "GUO2011_Q_FORBIDDEN", "quaternion_rate", "settling_time",
+    "SimulationResult", "ManeuverMetrics", "simulate", "maneuver_metrics",
 ]
 
 
@@ -61,20 +61,6 @@ GUO2011_Q_FORBIDDEN = _frozen(axis_angle_to_quat([0.0, 0.0, 1.0], math.pi / 4))
 """Forbidden attitude: 45 deg about z (Sec. 4; Table 1 prints the rounded [0, 0, 0.383, 0.924])."""
 
 
-def guo2011_disturbance(t: float) -> NDArray:
-    r"""Disturbance torque of Sec. 4 (N m, body axes).
-
-    .. math:: u_d = 10^{-3}\,[\sin(0.01t) - 0.5,\; \sin(0.01t) + 0.5,\; \cos(0.01t)]^T
-    """
-    s, c = math.sin(0.01 * t), math.cos(0.01 * t)
-    return np.array([1e-3 * (s - 0.5), 1e-3 * (s + 0.5), 1e-3 * c])
-
-
-def no_disturbance(t: float) -> NDArray:
-    """Zero disturbance torque."""
-    return np.zeros(3)
-
-
 def quaternion_rate(q: NDArray, omega: NDArray) -> NDArray:
     r"""Kinematics of eq. 4, :math:`\dot q_v = \tfrac12(q_4\omega - \omega^\times q_v)`,
     :math:`\dot q_4 = -\tfrac12 \omega^T q_v`.
@@ -82,7 +68,7 @@ def quaternion_rate(q: NDArray, omega: NDArray) -> NDArray:
     The same as :func:`convexguid.rotations.quat_derivative` (:math:`\tfrac12 q \otimes [\omega, 0]`), written
     out for one quaternion because the integrator calls it four times per step.
     """
-    return 0.5 * np.concatenate([q[3] * omega + _cross(q[:3], omega), [-(omega @ q[:3])]])
+    return 0.5 * np.concatenate([q[3] * omega + cross3(q[:3], omega), [-(omega @ q[:3])]])
 
 
 class AttitudeController(Protocol):
@@ -187,7 +173,7 @@ def simulate(controller: AttitudeController, inertia: ArrayLike, q0: ArrayLike, 
     Parameters
     ----------
     controller : AttitudeController
-        E.g. :class:`~convexguid.control.potential_function.PotentialFunctionController`; its ``torque(t, q,
+        E.g. :class:`~convexguid.families.potential_function.controller.PotentialFunctionController`; its ``torque(t, q,
         omega, h_w)`` is sampled once per step.
     inertia : array_like, shape (3, 3)
         Plant inertia (kg m^2); may differ from the controller's model.
@@ -223,7 +209,7 @@ def simulate(controller: AttitudeController, inertia: ArrayLike, q0: ArrayLike, 
 
     def rhs(t: float, y: NDArray, u: NDArray) -> NDArray:
         q, w, h = y[:4], y[4:7], y[7:]
-        w_dot = inertia_inv @ (u + disturbance(t) - _cross(w, inertia @ w + h))
+        w_dot = inertia_inv @ (u + disturbance(t) - cross3(w, inertia @ w + h))
         return np.concatenate([quaternion_rate(q, w), w_dot, -u])
 
     y = np.concatenate([unit_vector("q0", q0, 4), finite_vector("omega0", omega0, 3),

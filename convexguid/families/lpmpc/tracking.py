@@ -15,10 +15,10 @@ from typing import Protocol
 
 import numpy as np
 
+from convexguid.dynamics.disturbance import guo2011_disturbance
 from convexguid.dynamics.mrp_attitude import rk4_step, shortest_mrp
 from convexguid.progress import report
 from convexguid.rotations import euler321_to_quat, mrp_to_quat, quat_to_euler321, quat_to_mrp
-from convexguid.sim.reaction_wheel import guo2011_disturbance
 
 
 @dataclass(frozen=True)

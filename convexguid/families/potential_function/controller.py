@@ -48,7 +48,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from convexguid.checks import inertia_matrix, positive, unit_vector
 from convexguid.errors import SpecError
-from convexguid.rotations import quat_conjugate, quat_multiply
+from convexguid.rotations import cross3, quat_conjugate, quat_multiply
 
 __all__ = [
     "PotentialFunctionGains", "ControlInfo", "PotentialFunctionController", "error_quaternion",
@@ -58,11 +58,6 @@ __all__ = [
 
 _AXIS_TOL = 1e-12
 """Vector-part norm below which an Euler axis (and hence conditions 3 and 31) is undefined."""
-
-
-def _cross(a: NDArray, b: NDArray) -> NDArray:
-    """Cross product of two 3-vectors (several times faster than ``np.cross`` for single vectors)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def error_quaternion(q: ArrayLike, q_ref: ArrayLike) -> NDArray:
@@ -132,13 +127,13 @@ def angle_to_plane(a_e: NDArray, b: NDArray) -> float:
         Unit forbidden quaternion (scalar-last); its axis and the rotation matrix :math:`A_b` are taken from it.
     """
     a_b = b[:3] / np.linalg.norm(b[:3])
-    n = _cross(a_e, a_b)
+    n = cross3(a_e, a_b)
     norm_n = np.linalg.norm(n)
     if norm_n < _AXIS_TOL:
         return 0.0
     i_oa, bv, b4 = n / norm_n, b[:3], b[3]
     # A_b^{-1} i_OA = C(b)^T i_OA with C of convexguid.rotations.quat_to_dcm, written out for speed
-    i_ob = (b4 * b4 - bv @ bv) * i_oa + 2 * (bv @ i_oa) * bv + 2 * b4 * _cross(bv, i_oa)
+    i_ob = (b4 * b4 - bv @ bv) * i_oa + 2 * (bv @ i_oa) * bv + 2 * b4 * cross3(bv, i_oa)
     return math.pi / 2 - math.acos(min(1.0, abs(float(a_e @ i_ob))))
 
 
@@ -421,7 +416,7 @@ class PotentialFunctionController:
                 v_r = float(repulsive_potential(b, gains.eta, gains.theta_m))
         k = gains.eta * v_r**2
         r_eb = ev - k * bv
-        r_s = inertia @ (0.5 * (e4 * omega - _cross(omega, ev)) - 0.5 * k * (b4 * omega - _cross(omega, bv))
+        r_s = inertia @ (0.5 * (e4 * omega - cross3(omega, ev)) - 0.5 * k * (b4 * omega - cross3(omega, bv))
                          + 2 * gains.eta * k * v_r * (omega @ bv) * bv)
         r_mu = inertia @ r_eb
         if gains.adaptive:
@@ -432,7 +427,7 @@ class PotentialFunctionController:
             mu, s = gains.mu, gains.s
         r_g = inertia @ (omega + s * r_eb)
         g = min(_ratio(gains.u_g, np.abs(r_g).max()), gains.g_max) if gains.adaptive else gains.g
-        u = _cross(omega, inertia @ omega + h_w) - g * r_g - r_mu / mu - s * r_s
+        u = cross3(omega, inertia @ omega + h_w) - g * r_g - r_mu / mu - s * r_s
 
         escape = False
         if active and gains.theta_lm is not None:
@@ -451,7 +446,7 @@ class PotentialFunctionController:
         """Escape torque of eq. 32 (see :meth:`torque` for the choice of a_r and sgn(0))."""
         a_r = np.zeros(3)
         a_r[int(np.argmin(np.abs(a_e)))] = 1.0
-        d = _cross(a_e, a_r)
+        d = cross3(a_e, a_r)
         sign = 1.0 if omega @ d >= 0 else -1.0
         return self.gains.u_max * sign * d / np.abs(d).max()
 

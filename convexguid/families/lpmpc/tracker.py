@@ -6,7 +6,7 @@ prediction method 1; the nominal's miss is zero until a correction leaves the li
 Only if a component exceeds its threshold does it integrate the nonlinear model from the measured
 state under the nominal torque (method 2). If that trajectory still misses the target by more than the
 threshold, it becomes the new nominal and the energy-optimal correction of
-:mod:`convexguid.control.lpmpc` is added to the torque, interpolated between the LGR points (eq. 24)
+:mod:`convexguid.families.lpmpc.controller` is added to the torque, interpolated between the LGR points (eq. 24)
 with :math:`\\delta u_0 = 0`. The corrected torque is then integrated once more, so that the nominal
 states and torques stay consistent for the next prediction (the paper keeps the state trajectory of the
 uncorrected torque).
@@ -19,14 +19,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from convexguid.control.lpmpc import (
+from convexguid.dynamics.mrp_attitude import mrp_error_matrices
+from convexguid.families.lpmpc.controller import (
     box_constrained_correction,
     energy_optimal_correction,
     least_change_correction,
     terminal_map,
 )
-from convexguid.dynamics.mrp_attitude import mrp_error_matrices
-from convexguid.sim.tracking import Nominal, integrate, interp_rows
+from convexguid.families.lpmpc.tracking import Nominal, integrate, interp_rows
 from convexguid.transcription.lgr import RadauGrid
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.linalg import solve_continuous_are
 
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices
-from convexguid.sim.tracking import Nominal
+from convexguid.families.lpmpc.tracking import Nominal
 
 
 def lqr_gain(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray) -> np.ndarray:
