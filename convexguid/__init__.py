@@ -13,13 +13,13 @@ if TYPE_CHECKING:
     from convexguid.api import simulate, solve
     from convexguid.campaign import run_campaign
     from convexguid.problem_files import load_problem
-    from convexguid.report.validation import validate
+    from convexguid.validation.run import validate
 
 __all__ = ["load_problem", "run_campaign", "simulate", "solve", "validate"]
 __version__ = "0.1.0"
 
 _PUBLIC = {"load_problem": "convexguid.problem_files", "simulate": "convexguid.api", "solve": "convexguid.api",
-           "validate": "convexguid.report.validation", "run_campaign": "convexguid.campaign"}
+           "validate": "convexguid.validation.run", "run_campaign": "convexguid.campaign"}
 """Module of each public name."""
 
 

@@ -73,7 +73,7 @@ def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | No
     SpecError
         For invalid input (arguments of the wrong type included), a problem above its family's size limit, or an
         input taken from another case's result (e.g. ``boundary.tf_from``), which only
-        :func:`convexguid.report.validation.validate` resolves.
+        :func:`convexguid.validation.run.validate` resolves.
     """
     optional_callable("log", log)
     spec = _spec(problem, overrides)

@@ -108,7 +108,7 @@ def _write_outputs(sol: Solution, args: argparse.Namespace) -> list[str]:
     """Write ``--out`` (a staged folder swapped in whole) and ``--summary-json``; one reason per failed output."""
     from convexguid.errors import OutputError
     from convexguid.outputs import describe, staged_folder
-    from convexguid.report.plots import plot_solution
+    from convexguid.solution_plots import plot_solution
 
     failed = []
     if args.out is not None:
@@ -196,8 +196,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 def _cmd_validate(args: argparse.Namespace) -> int:
     from convexguid.outputs import describe
     from convexguid.progress import run
-    from convexguid.report.timings import timings_path
-    from convexguid.report.validation import check, check_report_outputs, validate
+    from convexguid.validation.run import check, check_report_outputs, validate
+    from convexguid.validation.timings import timings_path
 
     if args.check:
         results, differences = run(lambda: check(args.problems, args.report), "validate --check")

@@ -25,10 +25,10 @@ import numpy as np
 from convexguid.outputs import atomic_file, write_text_atomic
 
 if TYPE_CHECKING:
+    from convexguid.scp.check_repair import RepairRound, VerifiedSolve
     from convexguid.scp.problem import ProgramSize
     from convexguid.scp.state import IterationRecord
-    from convexguid.scp.verified import RepairRound, VerifiedSolve
-    from convexguid.verify import Verification
+    from convexguid.verification import Verification
 
 
 def optional(along: str | None = None, compute_time: bool = False) -> Any:

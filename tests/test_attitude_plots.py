@@ -17,11 +17,11 @@ from convexguid.families.quaternion_attitude.plots import (
     tracked_axes,
 )
 from convexguid.geometry import eigenaxis_path, keep_out_angles_deg
-from convexguid.report.plots import plot_solution
 from convexguid.rotations import dcm_to_quat, quat_conjugate, quat_multiply, quat_sign_continuous
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution, Trajectory
-from convexguid.verify import ConstraintCheck, Verification
+from convexguid.solution_plots import plot_solution
+from convexguid.verification import ConstraintCheck, Verification
 
 SUN = ConeGeometry("sun", (0, 0, 1), (-np.cos(np.radians(10)), 0, np.sin(np.radians(10))), 20.0, True)
 EARTH = ConeGeometry("earth", (1, 0, 0), (0, 0, -1), 60.0, False)

@@ -18,10 +18,10 @@ import yaml
 
 import convexguid
 from convexguid.campaign import run_campaign
+from convexguid.campaign.definition import SUMMARY_KEYS, load_campaign
 from convexguid.campaign.execute import figure_values, make_tasks
 from convexguid.campaign.plan import plan_runs
 from convexguid.campaign.progress import Progress, ProgressLine
-from convexguid.campaign.spec import SUMMARY_KEYS, load_campaign
 from convexguid.cli import main
 from convexguid.errors import SpecError
 from convexguid.families import get_family

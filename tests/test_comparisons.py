@@ -17,12 +17,12 @@ from convexguid.errors import SpecError
 from convexguid.families import get_family
 from convexguid.families.quaternion_attitude.figures import ConeGeometry
 from convexguid.problem_files import load_problem
-from convexguid.report import comparisons
-from convexguid.report.comparisons import TABLES, check_comparisons, comparison_sections, comparison_timings
-from convexguid.report.validation import CaseResult, link_overrides, run_order
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution
-from convexguid.verify import ConstraintCheck, Verification
+from convexguid.validation import comparisons
+from convexguid.validation.comparisons import TABLES, check_comparisons, comparison_sections, comparison_timings
+from convexguid.validation.run import CaseResult, link_overrides, run_order
+from convexguid.verification import ConstraintCheck, Verification
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 MULTICONE = [PROBLEMS / f"wang_multicone_{n}.yaml" for n in ("path_transfer", "time", "energy")]

@@ -17,7 +17,7 @@ from convexguid.families.quaternion_attitude.program import QuaternionProgram, e
 from convexguid.families.quaternion_attitude.solve import build_case
 from convexguid.problem_files import load_problem
 from convexguid.rotations import euler321_to_quat, quat_angle_between
-from convexguid.verify import propagate_attitude
+from convexguid.verification import propagate_attitude
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 

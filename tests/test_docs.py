@@ -12,7 +12,7 @@ from convexguid.cli import main
 from convexguid.families import FAMILIES
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution
-from convexguid.verify import ConstraintCheck, Verification
+from convexguid.verification import ConstraintCheck, Verification
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pytest
 
-import convexguid.report.plots
+import convexguid.solution_plots
 from convexguid.cli import main
 from convexguid.errors import OutputError
 from convexguid.outputs import (
@@ -34,8 +34,8 @@ from convexguid.outputs import (
     write_text_atomic,
 )
 from convexguid.problem_files import load_problem
-from convexguid.report.timings import render_timings, timings_path
-from convexguid.report.validation import CaseResult, render
+from convexguid.validation.run import CaseResult, render
+from convexguid.validation.timings import render_timings, timings_path
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "problems" / "cai2018_flat_attitude.yaml"
@@ -229,7 +229,7 @@ def test_a_write_failure_after_the_solve_keeps_the_summary(tmp_path, capsys, mon
     def disk_full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(convexguid.report.plots, "plot_solution", disk_full)
+    monkeypatch.setattr(convexguid.solution_plots, "plot_solution", disk_full)
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))  # where the summary is rescued
     out = tmp_path / "out"
     assert main(["solve", str(PAPER), "--quiet", "--out", str(out)]) == 1
@@ -367,7 +367,7 @@ def test_validate_reports_a_write_failure_after_solving_on_one_line(tmp_path, ca
     def disk_full(path, text):
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
-    monkeypatch.setattr("convexguid.report.validation.write_text_atomic", disk_full)
+    monkeypatch.setattr("convexguid.validation.run.write_text_atomic", disk_full)
     report = tmp_path / "REPORT.md"
     assert main(["validate", str(NO_REFERENCE), "--report", str(report)]) == 1
     err = capsys.readouterr().err

@@ -18,7 +18,7 @@ from convexguid.families.quaternion_attitude.path_transfer import (
 )
 from convexguid.geometry import PointingCone, eigenaxis_path, eigenaxis_rotation, keep_out_angles_deg
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_derivative
-from convexguid.verify import propagate_attitude
+from convexguid.verification import propagate_attitude
 
 REL = 1e-9  # round-off allowance on the torque and rate boxes
 

@@ -144,8 +144,8 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
     The energy case takes its final time from the controller's result (``boundary.tf_from``); the comparison
     table renders the three results it is given, in that order, and solves nothing itself.
     """
-    from convexguid.report.comparisons import comparison_sections
-    from convexguid.report.validation import CaseResult, link_overrides
+    from convexguid.validation.comparisons import comparison_sections
+    from convexguid.validation.run import CaseResult, link_overrides
 
     # The files' own 50-interval grid: on a 16-interval grid the minimum-energy SCP ends in a slow tail
     # (the path grazes the forbidden cone at a node and a midpoint; 80-140 iterations), which would make

@@ -26,7 +26,7 @@ from convexguid.families.quaternion_attitude.solve import build_case, path_trans
 from convexguid.problem_files import load_problem
 from convexguid.rotations import axis_angle_to_quat, quat_angle_between, quat_to_euler321
 from convexguid.scp.engine import solve_scp
-from convexguid.verify import TORQUE_AXIS_CHECKS, AttitudeTrack, torque_box_checks, verify_attitude_track
+from convexguid.verification import TORQUE_AXIS_CHECKS, AttitudeTrack, torque_box_checks, verify_attitude_track
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 FENG = PROBLEMS / "feng2018_nominal.yaml"
@@ -205,7 +205,7 @@ def test_energy_matches_ipopt_on_the_same_transcription(overrides):
 def test_torque_plot_draws_each_axis_bound(nominal, tmp_path, monkeypatch):
     import matplotlib.axes
 
-    from convexguid.report.plots import plot_solution
+    from convexguid.solution_plots import plot_solution
 
     drawn = []
     original = matplotlib.axes.Axes.axhline

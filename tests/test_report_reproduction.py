@@ -22,9 +22,9 @@ import yaml  # noqa: E402
 
 from convexguid.cli import main  # noqa: E402
 from convexguid.figure_files import keep_unchanged_pictures, same_picture, write_figure  # noqa: E402
-from convexguid.report.reproduction import PrintedNumber, lines_agree, reconcile, skeleton  # noqa: E402
 from convexguid.spec.loader import read_yaml_mapping  # noqa: E402
 from convexguid.spec.perturb import perturb_inputs  # noqa: E402
+from convexguid.validation.reproduction import PrintedNumber, lines_agree, reconcile, skeleton  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "problems" / "cai2018_flat_attitude.yaml"

@@ -119,7 +119,7 @@ def test_a_start_that_breaks_the_torque_box_is_restored_and_still_reaches_the_op
     from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_guess
     from convexguid.families.quaternion_attitude.solve import planning_setup
     from convexguid.problem_files import load_problem
-    from convexguid.scp.verified import PlanningSetup
+    from convexguid.scp.check_repair import PlanningSetup
 
     setup = planning_setup(load_problem(PROBLEMS / "wang_multicone_time.yaml", SLEW_180))
     program = setup.program

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from convexguid.bench_common import cell, environment_lines, markdown_grid
+from convexguid.campaign.definition import load_campaign
 from convexguid.campaign.execute import dask_client, make_tasks, run_on_dask, run_serial
 from convexguid.campaign.plan import plan_runs
-from convexguid.campaign.spec import load_campaign
 from convexguid.campaign.table import ResultsTable
 from convexguid.outputs import write_text_atomic
 
@@ -136,7 +136,7 @@ def _import_solver() -> None:
     """The imports every planned run makes (the API, the SCP engine and its check-repair loop, SciPy's
     integrators); a family's own modules are small beside them."""
     import convexguid.api  # noqa: F401
-    import convexguid.scp.verified  # noqa: F401
+    import convexguid.scp.check_repair  # noqa: F401
 
 
 def _busy_loop(_: int = 0) -> float:

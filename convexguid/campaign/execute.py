@@ -34,8 +34,8 @@ from convexguid.threads import limit_threads
 if TYPE_CHECKING:
     from distributed import Client
 
+    from convexguid.campaign.definition import Campaign
     from convexguid.campaign.plan import Run
-    from convexguid.campaign.spec import Campaign
 
 REASON_LENGTH = 300
 """Longest reason (characters) an error outcome keeps."""

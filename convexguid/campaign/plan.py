@@ -18,7 +18,7 @@ import numpy as np
 import yaml
 
 if TYPE_CHECKING:
-    from convexguid.campaign.spec import Campaign
+    from convexguid.campaign.definition import Campaign
 
 
 @dataclass(frozen=True)

@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from convexguid.campaign.definition import Campaign
 from convexguid.campaign.plan import Run
-from convexguid.campaign.spec import Campaign
 from convexguid.campaign.table import grid_points, is_ok, numeric_keys, quantities
 from convexguid.figure_files import write_figure
 

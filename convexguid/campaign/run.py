@@ -16,10 +16,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from convexguid.campaign.definition import load_campaign
 from convexguid.campaign.execute import dask_client, make_tasks, run_on_dask, run_serial
 from convexguid.campaign.plan import plan_runs
 from convexguid.campaign.progress import Progress
-from convexguid.campaign.spec import load_campaign
 from convexguid.campaign.table import ResultsTable, is_ok
 from convexguid.errors import SpecError
 
@@ -67,7 +67,7 @@ def run_campaign(campaign: str | Path, out: str | Path | None = None, *, schedul
                  workers: int | None = None, serial: bool = False,
                  progress: Callable[[Progress], None] | None = None,
                  connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S, report: bool = True) -> CampaignResult:
-    """Run the campaign file ``campaign`` (see :mod:`convexguid.campaign.spec` for its keys).
+    """Run the campaign file ``campaign`` (see :mod:`convexguid.campaign.definition` for its keys).
 
     Parameters
     ----------
@@ -133,7 +133,7 @@ def run_campaign(campaign: str | Path, out: str | Path | None = None, *, schedul
     rows = table.rows()
     report_path = None
     if report:
-        from convexguid.campaign.report import write_report
+        from convexguid.campaign.document import write_report
 
         report_path = write_report(loaded, runs, rows, directory)
     return CampaignResult(loaded.spec.name, directory, table.path, report_path, len(runs), len(rows), len(tasks),

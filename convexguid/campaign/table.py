@@ -27,8 +27,8 @@ from convexguid.errors import SpecError
 from convexguid.outputs import atomic_file
 
 if TYPE_CHECKING:
+    from convexguid.campaign.definition import Campaign
     from convexguid.campaign.plan import Run
-    from convexguid.campaign.spec import Campaign
 
 TABLE_FILE = "results.parquet"
 PARTS_DIR = "results.parts"

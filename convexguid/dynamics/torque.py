@@ -1,7 +1,7 @@
 """Planned body torque as a function of time, with the times where it is not smooth.
 
 A dense check integrates the rigid body under the planned torque
-(:func:`convexguid.verify.propagate_attitude`). Planned torques are smooth between known times: the
+(:func:`convexguid.verification.propagate_attitude`). Planned torques are smooth between known times: the
 nodes of a piecewise-linear interpolant (kinks), the phase changes of a bang-coast-bang law (jumps).
 An adaptive integrator that steps across such a time shrinks its step until the error estimate
 accepts it, many steps per kink; integrated piece by piece between the breakpoints, each piece is

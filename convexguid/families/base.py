@@ -22,8 +22,8 @@ from convexguid.spec.common import ProblemBase
 
 if TYPE_CHECKING:
     from convexguid.reference import IndependentOptimum
+    from convexguid.scp.check_repair import PlanningSetup
     from convexguid.scp.engine import IterationRecord
-    from convexguid.scp.verified import PlanningSetup
     from convexguid.solution import Figures, Solution
 
 class Planner(Protocol):
@@ -64,7 +64,7 @@ class Family:
     key_figures : tuple of (summary key, label)
         Summary figures the validation report lists under each case of the family (fields of ``figures``).
     planning_setup : callable or None
-        ``planning_setup(spec) -> PlanningSetup`` (:mod:`convexguid.scp.verified`) for a planned family: how it
+        ``planning_setup(spec) -> PlanningSetup`` (:mod:`convexguid.scp.check_repair`) for a planned family: how it
         builds the SCP program, with which settings, and its checker (dense verification and repairs). ``solve``
         runs it through the engine's check-repair loop and summarises; None for a simulated family.
     report_section : callable or None
@@ -74,7 +74,7 @@ class Family:
         ``timing_section``.
     timing_section : callable or None
         ``timing_section(spec, solution) -> list[str]``: markdown of the case's compute times for the validation
-        timings file (:mod:`convexguid.report.timings`, not committed), e.g. LPMPC update times. None: nothing.
+        timings file (:mod:`convexguid.validation.timings`, not committed), e.g. LPMPC update times. None: nothing.
     bench : callable or None
         ``bench(spec, args, planner) -> int`` (exit code) for ``convexguid bench`` on the loaded problem ``spec``
         (``spec.source`` is its file); None if the family has none.

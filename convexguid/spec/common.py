@@ -407,7 +407,7 @@ class ComparisonEntry(SpecModel):
     """The row a case contributes to one of the validation report's cross-method tables.
 
     Cases whose ``reference.comparison`` names the same ``table`` are rendered side by side, one row each,
-    in the order the validation runs them (see :mod:`convexguid.report.comparisons`, which lists the tables,
+    in the order the validation runs them (see :mod:`convexguid.validation.comparisons`, which lists the tables,
     their columns and their roles).
 
     Attributes

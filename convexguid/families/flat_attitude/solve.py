@@ -25,11 +25,11 @@ from convexguid.families.flat_attitude.program import (
     cone_cosine,
 )
 from convexguid.rotations import euler321_to_quat, quat_to_euler321
+from convexguid.scp.check_repair import Check, PlanningSetup, Repair, grown_margin
 from convexguid.scp.problem import SCPSettings
 from convexguid.scp.state import IterationRecord
-from convexguid.scp.verified import Check, PlanningSetup, Repair, grown_margin
 from convexguid.solution import Solution, Trajectory, planned_solution
-from convexguid.verify import Verification, propagate_attitude, torque_checks, verify_attitude_track
+from convexguid.verification import Verification, propagate_attitude, torque_checks, verify_attitude_track
 
 
 class BarycentricTorque(TorqueCommand):
@@ -139,13 +139,13 @@ REFINEMENT_TOLERANCE = 0.1
 
 
 class FlatAttitudeChecker:
-    """The family's side of the engine's check-repair loop (:mod:`convexguid.scp.verified`).
+    """The family's side of the engine's check-repair loop (:mod:`convexguid.scp.check_repair`).
 
     ``check`` propagates the planned torque and checks every constraint densely. ``repair`` adds check
     points where the interpolated plan breaks a bound between the path points and where the propagated
     path enters a cone; and since the flat-output interpolation and the true dynamics differ slightly,
     it tightens the node constraints by the excess the propagated path showed, with a margin that
-    grows each round that does not clear it (:func:`~convexguid.scp.verified.grown_margin`). Doing both
+    grows each round that does not clear it (:func:`~convexguid.scp.check_repair.grown_margin`). Doing both
     in one round costs a little objective (about 0.1% on a saturated case) and saves the rounds that
     adding points alone needs to close a gap of 1e-5 deg.
     """

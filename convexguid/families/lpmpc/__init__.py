@@ -3,7 +3,7 @@
 Simulated, not planned: ``convexguid simulate`` solves and verifies the nominal (another problem file),
 then flies it closed loop. Modules: ``spec`` (problem file), ``scenario`` (nominal in MRPs, laws, runs),
 ``solve`` (single case, Monte Carlo on a process pool, verification, summary), ``figures``, ``plots``,
-``report`` (the paper's Tables 2-4 beside ours) and ``bench`` (update times of LPMPC and LQR); the control laws
+``tables`` (the paper's Tables 2-4 beside ours) and ``bench`` (update times of LPMPC and LQR); the control laws
 ``controller`` (LPMPC's terminal map and corrections), ``tracker`` (LPMPC in closed loop) and ``lqr``, and
 ``tracking`` (the MRP plant, sensors and the fixed-step closed loop they fly in).
 """
@@ -33,8 +33,8 @@ FAMILY = Family(
     verification_method="the nominal's dense re-propagation and the closed-loop LPMPC flight",
     figures=LpmpcFigures,
     simulated=True,
-    report_section=lazy("convexguid.families.lpmpc.report:report_section"),
-    timing_section=lazy("convexguid.families.lpmpc.report:timing_section"),
+    report_section=lazy("convexguid.families.lpmpc.tables:report_section"),
+    timing_section=lazy("convexguid.families.lpmpc.tables:timing_section"),
     bench=lazy("convexguid.families.lpmpc.bench:bench_command"),
     estimate_size=lazy("convexguid.families.lpmpc.solve:estimate_size"),
     key_figures=(

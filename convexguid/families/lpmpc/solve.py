@@ -39,7 +39,7 @@ from convexguid.sizes import PROCESS_BYTES, SizeEstimate
 from convexguid.solution import Solution, Trajectory, make_solution
 from convexguid.spec.loader import apply_overrides, read_yaml_mapping, value_at
 from convexguid.threads import pool_worker_init
-from convexguid.verify import ConstraintCheck, Verification
+from convexguid.verification import ConstraintCheck, Verification
 
 ENVELOPE_STRIDE = 10
 """Monte Carlo histories are kept every this many steps (for the envelope plots)."""

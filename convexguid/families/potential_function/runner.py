@@ -46,7 +46,7 @@ from convexguid.families.potential_function.spec import PotentialFunctionProblem
 from convexguid.rotations import quat_angle_between
 from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution, Trajectory, _finite, make_solution
-from convexguid.verify import ConstraintCheck, Verification
+from convexguid.verification import ConstraintCheck, Verification
 
 ARRIVAL_TOL_DEG = 0.1
 """A run has reached the command when its final attitude error is below this (deg)."""

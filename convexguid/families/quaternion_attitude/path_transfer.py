@@ -435,7 +435,7 @@ class PathTransferResult:
         return [s.t_start_s for s in self.segments]
 
     def torque_command(self) -> TorqueCommand:
-        """The planned torque for :func:`convexguid.verify.propagate_attitude`: :meth:`torque_at`, with the
+        """The planned torque for :func:`convexguid.verification.propagate_attitude`: :meth:`torque_at`, with the
         times where it jumps (:attr:`breakpoints_s`) and :meth:`sample` for many times."""
         return TorqueCommand(self.torque_at, self.breakpoints_s, sample=lambda t: self.sample(t)[2])
 

@@ -37,7 +37,7 @@ from convexguid.figure_files import write_figure  # noqa: E402
 from convexguid.geometry import eigenaxis_path  # noqa: E402
 from convexguid.rotations import quat_conjugate, quat_rotate  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
-from convexguid.verify import TORQUE_AXIS_CHECKS  # noqa: E402
+from convexguid.verification import TORQUE_AXIS_CHECKS  # noqa: E402
 
 Save = Callable[..., Path]
 """``save(fig, ax, title, ylabel, path)``: label a time-history axis, write the figure and close it."""

@@ -29,11 +29,11 @@ from convexguid.families.quaternion_attitude.program import (
 )
 from convexguid.geometry import PointingCone
 from convexguid.rotations import quat_angle_between, quat_sign_continuous
+from convexguid.scp.check_repair import Check, PlanningSetup, Repair, grown_margin
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.scp.state import IterationRecord
-from convexguid.scp.verified import Check, PlanningSetup, Repair, grown_margin
 from convexguid.solution import Solution, Trajectory, make_solution, planned_solution
-from convexguid.verify import (
+from convexguid.verification import (
     AttitudeTrack,
     ConstraintCheck,
     Verification,
@@ -76,7 +76,7 @@ def verify_plan(case: AttitudeCase, t_end: float, torque: TorqueCommand | Callab
     """Integrate the planned torque and check every constraint of the case on a dense grid.
 
     The torque is integrated piece by piece between its breakpoints (see
-    :func:`~convexguid.verify.propagate_attitude`); ``max_step`` is only for a torque without them.
+    :func:`~convexguid.verification.propagate_attitude`); ``max_step`` is only for a torque without them.
     """
     t_grid = np.linspace(case.t0, t_end, settings.grid_points)
     track = propagate_attitude(case.inertia, torque, case.q0, case.w0, t_grid, settings.rtol, settings.atol,
@@ -97,13 +97,13 @@ def verify_plan(case: AttitudeCase, t_end: float, torque: TorqueCommand | Callab
 
 
 class QuaternionChecker:
-    """The family's side of the engine's check-repair loop (:mod:`convexguid.scp.verified`).
+    """The family's side of the engine's check-repair loop (:mod:`convexguid.scp.check_repair`).
 
     ``check`` integrates the planned torque (linear between nodes, integrated node to node) and checks
     every cone, the forbidden attitudes, the rate and torque boxes and the final state on a dense grid. ``repair``
     tightens the node constraints by what the check saw between nodes: the cone and forbidden-attitude
     margin, and the rate bound, each by a margin that grows every round that does not clear it
-    (:func:`~convexguid.scp.verified.grown_margin`). The tightened program starts from the last plan;
+    (:func:`~convexguid.scp.check_repair.grown_margin`). The tightened program starts from the last plan;
     the engine moves that start into the tightened (hard) rate box.
     """
 

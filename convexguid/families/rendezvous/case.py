@@ -33,7 +33,7 @@ from convexguid.errors import SolverError
 from convexguid.families.rendezvous.figures import ArcsPlanFigures, LcvxPlanFigures
 from convexguid.scp.engine import IterationRecord
 from convexguid.solution import Trajectory
-from convexguid.verify import ConstraintCheck, Verification
+from convexguid.verification import ConstraintCheck, Verification
 
 
 @dataclass(frozen=True)

@@ -24,9 +24,9 @@ from convexguid.families.rendezvous.case import (
 )
 from convexguid.families.rendezvous.figures import ArcsPlanFigures, LcvxCertificate, RendezvousFigures
 from convexguid.families.rendezvous.lcvx import solve_lcvx
+from convexguid.scp.check_repair import Check, PlanningSetup, Repair
 from convexguid.scp.problem import SCPSettings
 from convexguid.scp.state import IterationRecord
-from convexguid.scp.verified import Check, PlanningSetup, Repair
 from convexguid.solution import Solution, Trajectory, make_solution
 
 DEFAULT_BURNS = 2

@@ -3,7 +3,7 @@
 Wall-clock and compute times change from run to run and from machine to machine, so the validation report,
 which is committed, carries none of them and stays the same when nothing changed. This file has them: the
 machine, per case the wall, SCP and convex-solver times, the compute-time (``timed``) columns of the
-cross-method tables (:func:`~convexguid.report.comparisons.comparison_timings`) and each family's own times
+cross-method tables (:func:`~convexguid.validation.comparisons.comparison_timings`) and each family's own times
 (:attr:`~convexguid.families.base.Family.timing_section`, e.g. the LPMPC update times of Feng et al.'s
 Table 4). It is git-ignored. Rendering only: nothing here solves or measures.
 """
@@ -18,7 +18,7 @@ from convexguid.bench_common import cell, environment_lines
 from convexguid.families import get_family
 
 if TYPE_CHECKING:
-    from convexguid.report.validation import CaseResult
+    from convexguid.validation.run import CaseResult
 
 TIMED_PACKAGES = ("numpy", "scipy", "clarabel", "daqp", "osqp")
 """Versions listed with the machine: the packages whose speed the times mostly measure."""

@@ -32,7 +32,7 @@ from convexguid.progress import report
 from convexguid.scp.engine import Log, SCPAlgorithm
 from convexguid.scp.problem import NonconvexProgram, SCPSettings
 from convexguid.scp.state import SCPResult, merge_results
-from convexguid.verify import Verification
+from convexguid.verification import Verification
 
 DEFAULT_REPAIR_BUDGET = 6
 """Repair rounds tried after the first solve before a plan is reported ``unverified``."""

@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from convexguid.bench_common import markdown_grid, one_line
+from convexguid.campaign.definition import Campaign
 from convexguid.campaign.plan import Run, yaml_text
 from convexguid.campaign.plots import write_plots
-from convexguid.campaign.spec import Campaign
 from convexguid.campaign.table import TABLE_FILE, grid_points, is_ok, quantities
 from convexguid.solution import write_text_atomic
 

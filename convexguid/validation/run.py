@@ -10,8 +10,8 @@ without a ``reference:`` block is solved and verified, and the report says there
 
 The report holds only what is the same on every machine, so re-running on an unchanged tree leaves it
 unchanged: compute times and SCP iteration counts (which round-off moves by a few) go to the timings file beside
-it (:mod:`convexguid.report.timings`, not committed); a committed line is kept wherever the fresh one agrees with
-it within the reproduction tolerance (:func:`~convexguid.report.reproduction.reconcile`), and a committed picture
+it (:mod:`convexguid.validation.timings`, not committed); a committed line is kept wherever the fresh one agrees with
+it within the reproduction tolerance (:func:`~convexguid.validation.reproduction.reconcile`), and a committed picture
 wherever the fresh one shows the same (:func:`~convexguid.figure_files.keep_unchanged_pictures`).
 :func:`check` solves the same cases and lists the lines that do not agree, writing nothing. Output
 paths are checked before anything is solved; each case's figures folder is replaced as a whole
@@ -20,7 +20,7 @@ paths are checked before anything is solved; each case's figures folder is repla
 A case may take an input from another case's result (``boundary.tf_from: {problem, figure}``, see
 :meth:`~convexguid.spec.common.ProblemBase.input_links`): the runner solves the cases in an order where
 each such case comes after the one it names, and loads it with the figure as an override. Cases whose
-``reference.comparison`` names the same table are set side by side by :mod:`convexguid.report.comparisons`,
+``reference.comparison`` names the same table are set side by side by :mod:`convexguid.validation.comparisons`,
 which renders the results and solves nothing.
 """
 
@@ -38,12 +38,12 @@ from convexguid.families import get_family
 from convexguid.figure_files import keep_unchanged_pictures
 from convexguid.outputs import check_output_file, check_output_folder, staged_folder, write_text_atomic
 from convexguid.problem_files import load_problem
-from convexguid.report.comparisons import check_comparisons, comparison_sections, comparison_timings
-from convexguid.report.plots import plot_solution
-from convexguid.report.reproduction import LineDifference, reconcile
-from convexguid.report.timings import render_timings, timings_path
 from convexguid.solution import Solution
+from convexguid.solution_plots import plot_solution
 from convexguid.spec import ProblemSpec
+from convexguid.validation.comparisons import check_comparisons, comparison_sections, comparison_timings
+from convexguid.validation.reproduction import LineDifference, reconcile
+from convexguid.validation.timings import render_timings, timings_path
 
 DEFAULT_PROBLEMS_DIR = Path("problems")
 DEFAULT_REPORT = Path("validation/REPORT.md")
@@ -205,8 +205,8 @@ def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_R
 
     Cases are solved in :func:`run_order` (linked inputs resolved by :func:`link_overrides`); the results,
     the report's rows and its comparison tables keep the order of ``problems``. A committed line the fresh
-    report agrees with is kept (:func:`~convexguid.report.reproduction.reconcile`). The compute times go to
-    :func:`~convexguid.report.timings.timings_path` beside the report.
+    report agrees with is kept (:func:`~convexguid.validation.reproduction.reconcile`). The compute times go to
+    :func:`~convexguid.validation.timings.timings_path` beside the report.
 
     Raises
     ------
