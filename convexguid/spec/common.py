@@ -33,7 +33,6 @@ from pydantic_core import PydanticCustomError
 
 from convexguid.backends import check_backend_name
 from convexguid.errors import BackendError, SpecError, value_text
-from convexguid.geometry import PointingCone
 from convexguid.spec.numbers import as_declared
 
 SPEC_CONFIG = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False, defer_build=True)
@@ -246,68 +245,6 @@ class TimeInterval(SpecModel):
         return self.tf_s - self.t0_s
 
 
-class Spacecraft(SpecModel):
-    """Rigid-body spacecraft with a symmetric torque bound on each body axis.
-
-    Attributes
-    ----------
-    inertia_kgm2 : tuple of tuple of float
-        Inertia matrix about the centre of mass in body axes, kg m^2 (3x3, symmetric positive definite).
-    torque_max_Nm : float
-        Bound on each body-axis control torque, N m.
-    """
-
-    inertia_kgm2: InertiaMatrix
-    torque_max_Nm: PositiveFloat
-
-    @property
-    def inertia_matrix(self) -> np.ndarray:
-        """Inertia matrix, kg m^2 (3x3, read-only)."""
-        return readonly(np.array(self.inertia_kgm2))
-
-
-class KeepOutSpec(SpecModel):
-    """Keep-out cone: the body axis must stay more than ``half_angle_deg`` away from an inertial direction.
-
-    Attributes
-    ----------
-    name : str
-        Unique name of the cone (used in constraint names, e.g. ``keep_out_sun_deg``).
-    body_axis : tuple of float
-        Sensitive body axis (body frame), any nonzero length.
-    inertial_dir : tuple of float
-        Direction to avoid (inertial frame), any nonzero length.
-    half_angle_deg : float
-        Cone half-angle, deg, in (0, 180).
-    """
-
-    name: NonEmptyStr
-    body_axis: Direction3
-    inertial_dir: Direction3
-    half_angle_deg: Annotated[float, Field(gt=0, lt=180)]
-
-    @property
-    def body_axis_unit(self) -> np.ndarray:
-        """Unit body axis (read-only)."""
-        axis = np.array(self.body_axis)
-        return readonly(axis / np.linalg.norm(axis))
-
-    @property
-    def inertial_dir_unit(self) -> np.ndarray:
-        """Unit inertial direction (read-only)."""
-        direction = np.array(self.inertial_dir)
-        return readonly(direction / np.linalg.norm(direction))
-
-    @property
-    def half_angle_rad(self) -> float:
-        """Cone half-angle, rad."""
-        return math.radians(self.half_angle_deg)
-
-    def pointing_cone(self) -> PointingCone:
-        """This cone as a keep-out :class:`~convexguid.geometry.PointingCone` (unit vectors, rad)."""
-        return PointingCone.from_spec(self, keep_out=True)
-
-
 def _as_tuple(v: object) -> tuple[object, ...]:
     if not isinstance(v, (list, tuple)):
         raise spec_error("expected a list", "give a YAML list (possibly empty) of mappings")
@@ -326,10 +263,6 @@ def _unique_names(items: tuple) -> tuple:
 def named_list(model: type) -> object:
     """Type of a YAML list of ``model`` mappings with unique ``name`` keys, stored as a tuple."""
     return Annotated[tuple[model, ...], BeforeValidator(_as_tuple), AfterValidator(_unique_names)]
-
-
-KeepOutList = named_list(KeepOutSpec)
-"""A YAML list of :class:`KeepOutSpec` with unique names, stored as a tuple."""
 
 
 class SolverSettings(SpecModel):

@@ -18,13 +18,11 @@ from pydantic import Field, field_validator, model_validator
 
 from convexguid.rotations import euler321_to_quat
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
-from convexguid.spec.attitude_checks import check_outside_keep_out, check_slew_time
+from convexguid.spec.attitude import KeepOutList, Spacecraft, check_outside_keep_out, check_slew_time
 from convexguid.spec.common import (
-    KeepOutList,
     ProblemBase,
     Reference,
     SolverSettings,
-    Spacecraft,
     SpecModel,
     TimeInterval,
     Vector3,

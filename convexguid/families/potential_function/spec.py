@@ -33,11 +33,11 @@ from convexguid.errors import SpecError
 from convexguid.families.potential_function.controller import PotentialFunctionGains
 from convexguid.rotations import quat_angle_between
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
+from convexguid.spec.attitude import Spacecraft
 from convexguid.spec.common import (
     PositiveFloat,
     ProblemBase,
     Reference,
-    Spacecraft,
     SpecModel,
     UnitQuaternion,
     Vector3,

@@ -24,12 +24,11 @@ from pydantic import Field, field_validator, model_validator
 from convexguid.geometry import PointingCone
 from convexguid.rotations import axis_angle_to_quat, euler321_to_quat, quat_angle_between
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
-from convexguid.spec.attitude_checks import check_outside_keep_out, check_slew_time
+from convexguid.spec.attitude import KeepOutList, check_outside_keep_out, check_slew_time
 from convexguid.spec.common import (
     Direction3,
     InertiaMatrix,
     InputLink,
-    KeepOutList,
     PositiveFloat,
     ProblemBase,
     Reference,
