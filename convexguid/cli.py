@@ -7,11 +7,17 @@ verification failed (the summary is still written); 2 bad input (one line, no tr
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from convexguid.errors import ConvexGuidError, SpecError
+from convexguid.errors import ConvexGuidError, OutputError, SpecError
+from convexguid.outputs import check_output_file, check_output_folder, describe, rescue_copy, staged_folder
+from convexguid.progress import run
+
+# Each command imports the parts of the package it drives when it runs (the solver, the registry of families, the
+# report, Dask): ``--help`` and a bad argument load none of them.
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import IterationRecord
@@ -96,8 +102,6 @@ def _print_result(sol: Solution) -> None:
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse unusable ``--out`` / ``--summary-json`` paths before the work starts (OutputError: exit 2)."""
-    from convexguid.outputs import check_output_file, check_output_folder
-
     if args.out is not None:
         check_output_folder(args.out, overwrite=args.overwrite, keep=[args.problem])
     if args.summary_json is not None:
@@ -106,8 +110,6 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 def _write_outputs(sol: Solution, args: argparse.Namespace) -> list[str]:
     """Write ``--out`` (a staged folder swapped in whole) and ``--summary-json``; one reason per failed output."""
-    from convexguid.errors import OutputError
-    from convexguid.outputs import describe, staged_folder
     from convexguid.solution_plots import plot_solution
 
     failed = []
@@ -132,10 +134,6 @@ def _write_outputs(sol: Solution, args: argparse.Namespace) -> list[str]:
 
 def _report_lost_outputs(sol: Solution, args: argparse.Namespace, failed: list[str]) -> None:
     """One line on stderr: what could not be written and where the summary is (rescued if need be)."""
-    import json
-
-    from convexguid.outputs import rescue_copy
-
     if args.summary_json is not None and not any(f.startswith("--summary-json") for f in failed):
         where = f"the summary is in {args.summary_json}"
     else:
@@ -150,7 +148,6 @@ def _report_lost_outputs(sol: Solution, args: argparse.Namespace, failed: list[s
 def _cmd_solve(args: argparse.Namespace) -> int:
     from convexguid.api import check_runnable, solve
     from convexguid.problem_files import load_problem
-    from convexguid.progress import run
 
     spec = load_problem(args.problem, args.overrides)
     check_runnable(spec)
@@ -178,7 +175,6 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from convexguid.api import check_runnable, simulate
     from convexguid.families import get_family
     from convexguid.problem_files import load_problem
-    from convexguid.progress import run
 
     spec = load_problem(args.problem, args.overrides)
     check_runnable(spec)
@@ -194,8 +190,6 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from convexguid.outputs import describe
-    from convexguid.progress import run
     from convexguid.validation.run import check, check_report_outputs, validate
     from convexguid.validation.timings import timings_path
 
@@ -233,7 +227,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from convexguid.backends import check_backend_name
     from convexguid.families import FAMILIES, get_family
     from convexguid.problem_files import load_problem
-    from convexguid.progress import run
     from convexguid.threads import single_threaded
 
     counts = [("--repeat", args.repeat), ("--runs", args.runs), *(("--nodes", n) for n in args.nodes or ())]

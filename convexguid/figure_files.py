@@ -12,12 +12,15 @@ drawn.
 from __future__ import annotations
 
 import shutil
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import numpy as np
 
 from convexguid.outputs import atomic_file
+
+Save = Callable[..., Path]
+"""The figure writer a family's ``plot`` hook is handed: ``save(fig, ax, title, ylabel, path)``, :func:`save_figure`."""
 
 
 def save_figure(fig, ax, title: str, ylabel: str, path: Path, xlabel: str = "time [s]") -> Path:
@@ -34,7 +37,7 @@ def save_figure(fig, ax, title: str, ylabel: str, path: Path, xlabel: str = "tim
 def write_figure(fig, path: Path, dpi: float | None = None) -> Path:
     """Write ``fig`` to ``path`` atomically (:func:`~convexguid.outputs.atomic_file`; the format from the
     suffix, e.g. ``.png``; ``dpi`` as for ``savefig``, the figure's own if None) and close it; return ``path``."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib only when something is drawn
 
     try:
         with atomic_file(path, "wb") as fh:
@@ -56,7 +59,7 @@ PIXEL_SHARE = 1e-3
 def same_picture(first: Path, second: Path) -> bool:
     """The two image files show the same picture: equal size, and at most :data:`PIXEL_SHARE` of the pixels
     differing by more than :data:`PIXEL_LEVEL`."""
-    import matplotlib.image as mpimg
+    import matplotlib.image as mpimg  # matplotlib only when pictures are compared
 
     a, b = mpimg.imread(first), mpimg.imread(second)
     if a.shape != b.shape:

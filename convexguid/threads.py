@@ -19,22 +19,20 @@ import contextlib
 import signal
 from collections.abc import Iterator
 
+from threadpoolctl import threadpool_limits
+
 WORKER_THREADS = 1
 """BLAS/OpenMP threads of each worker process: one per process, the processes share the cores."""
 
 
 def limit_threads(threads: int = WORKER_THREADS) -> None:
     """Limit this process's BLAS and OpenMP thread pools to ``threads`` from now on."""
-    from threadpoolctl import threadpool_limits
-
     threadpool_limits(threads)
 
 
 @contextlib.contextmanager
 def single_threaded() -> Iterator[None]:
     """One BLAS/OpenMP thread inside the ``with`` block; the previous limits are restored after it."""
-    from threadpoolctl import threadpool_limits
-
     with threadpool_limits(WORKER_THREADS):
         yield
 

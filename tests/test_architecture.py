@@ -1,8 +1,7 @@
 """The package's layering, read from its own imports (issue 21).
 
-* No import circles: the graph of every ``import`` in the package (at the top of a module, inside functions, and
-  the ``lazy("module:name")`` routes of the family registry) has no cycle. A cycle is what an import inside a
-  function hides; the test sees through it.
+* No import circles: the graph of every ``import`` in the package (at the top of a module and inside functions)
+  has no cycle. A cycle is what an import inside a function hides; the test sees through it.
 * The core, the command line, the report and the campaign reach a family only through the registry
   (``convexguid.families``: ``FAMILIES``, ``Family``, ``get_family``, ``family_names``) and the ``Family`` contract
   (``convexguid.families.base``): no family module, class or constant is imported outside ``families/``.
@@ -42,8 +41,7 @@ def _type_checking(node: ast.AST) -> bool:
 def imports(module: str) -> Iterator[tuple[str, str, int]]:
     """``(imported module, name taken from it or "", line)`` for every import of ``module`` inside the package.
 
-    Imports under ``if TYPE_CHECKING:`` are annotations, not imports, and are skipped; ``lazy("m:f")`` counts as
-    importing ``f`` from ``m``.
+    Imports under ``if TYPE_CHECKING:`` are annotations, not imports, and are skipped.
     """
     tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
     pending = list(ast.iter_child_nodes(tree))
@@ -60,10 +58,6 @@ def imports(module: str) -> Iterator[tuple[str, str, int]]:
             for alias in node.names:
                 submodule = f"{node.module}.{alias.name}"
                 yield (submodule, "", node.lineno) if submodule in MODULES else (node.module, alias.name, node.lineno)
-        elif (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "lazy" and node.args
-              and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str)):
-            target, _, name = node.args[0].value.partition(":")
-            yield target, name, node.lineno
 
 
 def import_graph() -> dict[str, set[str]]:

@@ -287,7 +287,7 @@ class DaqpBackend(Backend):
         return "optimal_inaccurate" if excess <= INACCURATE_FACTOR * tol else "failed"
 
     def _solve(self, prog: ConicProgram) -> tuple[str, np.ndarray | None, np.ndarray | None, int]:
-        import daqp
+        import daqp  # the optional solver package, loaded when this backend runs
 
         lay = self._layout
         data, b = prog.A.data, prog.b

@@ -7,6 +7,7 @@ import time
 from functools import cache
 
 from convexguid.backends.base import Backend, BackendResult, ConicProgram
+from convexguid.backends.dense import DaqpBackend
 from convexguid.backends.solvers import ClarabelBackend, OsqpBackend, QpsolversBackend
 from convexguid.errors import BackendError
 
@@ -26,8 +27,6 @@ DENSE_MIN_DENSITY = 0.3
 @cache
 def native_backends() -> dict[str, type[Backend]]:
     """The backends this package drives directly, by name (``daqp`` when it is installed; looked up once)."""
-    from convexguid.backends.dense import DaqpBackend
-
     natives: dict[str, type[Backend]] = {"clarabel": ClarabelBackend, "osqp": OsqpBackend}
     if importlib.util.find_spec("daqp") is not None:
         natives["daqp"] = DaqpBackend
@@ -36,7 +35,7 @@ def native_backends() -> dict[str, type[Backend]]:
 
 def available_backends() -> tuple[str, ...]:
     """Names accepted by :func:`make_backend` on this machine."""
-    import qpsolvers
+    import qpsolvers  # its solver discovery is slow: only when the list is asked for
 
     return (AUTO, *native_backends(), *(_QPSOLVERS_PREFIX + s for s in sorted(qpsolvers.available_solvers)))
 

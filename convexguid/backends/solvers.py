@@ -36,7 +36,7 @@ class ClarabelBackend(Backend):
     supports_soc = True
 
     def _setup(self, program: ConicProgram) -> None:
-        import clarabel
+        import clarabel  # each solver package is loaded when its backend is chosen
 
         settings = clarabel.DefaultSettings()
         settings.verbose = False
@@ -76,7 +76,7 @@ class OsqpBackend(Backend):
     name = "osqp"
 
     def _setup(self, program: ConicProgram) -> None:
-        import osqp
+        import osqp  # loaded when this backend is chosen
 
         if program.cones.soc:
             raise BackendError("backend 'osqp' cannot take second-order cones; use 'clarabel'")
@@ -125,7 +125,7 @@ class QpsolversBackend(Backend):
         self._program = program
 
     def solve(self) -> BackendResult:
-        import qpsolvers
+        import qpsolvers  # loaded when this backend is chosen
 
         prog = self._program
         P_full = (prog.P + sp.triu(prog.P, k=1).T).tocsc()

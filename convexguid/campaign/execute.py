@@ -67,6 +67,7 @@ def make_tasks(campaign: Campaign, runs: Sequence[Run]) -> list[RunTask]:
 
 def run_task(task: RunTask) -> dict[str, Any]:
     """Solve (or simulate) one run and summarise it; never raises (an exception is an ``error`` outcome)."""
+    # imported in the worker that runs the task: the scheduler unpickling it does not load the solver
     from convexguid.api import solve
 
     started = time.perf_counter()
@@ -141,7 +142,7 @@ def run_on_dask(tasks: Sequence[RunTask], sink: OutcomeSink, client: Client,
     ``run_id`` and ``figures`` attributes will do). Whatever ends this early (an interrupt, an exception of
     ``sink``) cancels the tasks still pending.
     """
-    from distributed import as_completed
+    from distributed import as_completed  # Dask only for a run on a cluster (--serial needs none)
 
     session = uuid.uuid4().hex[:8]
     futures = {client.submit(work, task, key=f"convexguid-run-{task.run_id}-{session}", pure=False): task
@@ -171,7 +172,7 @@ def dask_client(scheduler: str | None, workers: int | None, connect_timeout_s: f
     SpecError
         If no scheduler answers at ``scheduler`` within ``connect_timeout_s`` (nothing has run).
     """
-    import dask
+    import dask  # Dask only for a run on a cluster (--serial needs none)
     from distributed import Client, LocalCluster
 
     if scheduler is not None:

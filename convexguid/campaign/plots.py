@@ -65,7 +65,7 @@ def _mark_failures(ax, rows: Sequence[dict[str, Any]], x_key: str, labelled: set
 
 def _sweep(campaign: Campaign, rows: Sequence[dict[str, Any]], x_key: str, name: str, directory: Path
            ) -> tuple[str, Path]:
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # matplotlib only when the report is drawn
 
     others = [k for axis in campaign.spec.grid if x_key not in axis.names for k in axis.names]
     series: dict[tuple, list[dict[str, Any]]] = {}
@@ -111,7 +111,7 @@ def _sweep_line(ax, campaign: Campaign, rows: Sequence[dict[str, Any]], x_key: s
 
 
 def _histograms(campaign: Campaign, rows: Sequence[dict[str, Any]], directory: Path) -> tuple[str, Path]:
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # matplotlib only when the report is drawn
 
     names = [n for n in quantities(campaign) if any(r[n] is not None for r in rows)][: 2 * MAX_PANELS]
     columns = min(3, max(1, len(names)))
@@ -134,7 +134,7 @@ def _histograms(campaign: Campaign, rows: Sequence[dict[str, Any]], directory: P
 
 
 def _scatter(campaign: Campaign, rows: Sequence[dict[str, Any]], directory: Path) -> tuple[str, Path]:
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # matplotlib only when the report is drawn
 
     names = [n for n in quantities(campaign) if any(r[n] is not None for r in rows)][:MAX_PANELS]
     keys = [d.key for d in campaign.spec.dispersions][:MAX_PANELS]

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from convexguid.campaign.definition import load_campaign
+from convexguid.campaign.document import write_report
 from convexguid.campaign.execute import dask_client, make_tasks, run_on_dask, run_serial
 from convexguid.campaign.plan import plan_runs
 from convexguid.campaign.progress import Progress
@@ -133,8 +134,6 @@ def run_campaign(campaign: str | Path, out: str | Path | None = None, *, schedul
     rows = table.rows()
     report_path = None
     if report:
-        from convexguid.campaign.document import write_report
-
         report_path = write_report(loaded, runs, rows, directory)
     return CampaignResult(loaded.spec.name, directory, table.path, report_path, len(runs), len(rows), len(tasks),
                           dict(Counter(row["status"] for row in rows)), failures, elapsed, used)

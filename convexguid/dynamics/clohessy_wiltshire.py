@@ -93,7 +93,7 @@ def cw_zoh(mean_motion: float, accel: float, dt: float, dim: int = 3) -> tuple[n
     :math:`\\begin{bmatrix} A & B \\\\ 0 & 0\\end{bmatrix}\\Delta t` (Van Loan 1978), so it holds for any
     ``dt`` without series truncation.
     """
-    from scipy.linalg import expm
+    from scipy.linalg import expm  # only the exact-ZOH path needs it
 
     A, B = cw_matrices(mean_motion, accel, dim)
     nx, nu = B.shape

@@ -10,7 +10,6 @@ the heavy modules (SCP, matplotlib, CasADi) when they are called.
 from __future__ import annotations
 
 import argparse
-import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from os import PathLike
@@ -122,18 +121,3 @@ class Family:
         is above :attr:`memory_limit_bytes`; nothing without :attr:`estimate_size`."""
         if self.estimate_size is not None:
             check_size(spec.source, self.name, self.estimate_size(spec), self.memory_limit_bytes)
-
-
-def lazy(target: str) -> Callable:
-    """The function ``"package.module:name"``, imported at its first call.
-
-    A family's ``__init__`` hands these to :class:`Family`, so loading a problem file imports
-    neither the SCP engine nor matplotlib nor CasADi.
-    """
-    module_name, _, name = target.partition(":")
-
-    def call(*args, **kwargs):
-        return getattr(importlib.import_module(module_name), name)(*args, **kwargs)
-
-    call.__name__ = call.__qualname__ = name
-    return call

@@ -37,6 +37,7 @@ class Trial:
 
 def run_trial(trial: Trial) -> dict[str, Any]:
     """Solve ``trial``, and judge it against the family's independent optimum when it asks for one."""
+    # imported in the worker that runs the trial: the scheduler unpickling the task does not load the solver
     from convexguid.api import solve
     from convexguid.families import get_family
 

@@ -3,7 +3,6 @@ and one angle history per keep-out cone."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -11,9 +10,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from convexguid.figure_files import Save  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
-Save = Callable[..., Path]
 """``save(fig, ax, title, ylabel, path)``: label a time-history axis, write the figure and close it."""
 
 PLOT_GROUPS: list[tuple[str, str, str, str]] = [

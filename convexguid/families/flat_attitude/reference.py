@@ -123,7 +123,7 @@ def solve_flat_attitude_ipopt(problem: FlatAttitudeProblem, x0: np.ndarray, tol:
     ModuleNotFoundError
         If ``casadi`` is not installed (``pip install convexguid[bench]``).
     """
-    import casadi as ca
+    import casadi as ca  # optional (the bench and test extras): loaded when IPOPT is asked for
 
     start = time.perf_counter()
     n1 = problem.grid.n + 1

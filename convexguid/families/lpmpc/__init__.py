@@ -10,33 +10,63 @@ then flies it closed loop. Modules: ``spec`` (problem file), ``scenario`` (nomin
 
 from __future__ import annotations
 
-from convexguid.families.base import Family, lazy
+from convexguid.families.base import Family
 from convexguid.families.lpmpc.figures import LpmpcFigures
 from convexguid.families.lpmpc.spec import LpmpcProblem
 
+# The hooks below import their modules when first called, so that reading a problem file loads neither the
+# SCP engine nor matplotlib nor CasADi (each import inside a function here is for that reason only).
+
 
 def _solve(spec, log, planner):
-    """Simulate, the nominal planned by ``planner`` (``log`` is unused: the nominal's SCP iterations are not shown).
-
-    The simulation modules are imported here, at the first run: loading a problem file stays light.
-    """
+    """Simulate, the nominal planned by ``planner`` (``log`` is unused: the nominal's SCP iterations are not shown)."""
     from convexguid.families.lpmpc.solve import simulate_lpmpc
 
     return simulate_lpmpc(spec, planner)
+
+
+def _plot(solution, out_dir, save):
+    from convexguid.families.lpmpc.plots import plot_lpmpc
+
+    return plot_lpmpc(solution, out_dir, save)
+
+
+def _report_section(spec, solution):
+    from convexguid.families.lpmpc.tables import report_section
+
+    return report_section(spec, solution)
+
+
+def _timing_section(spec, solution):
+    from convexguid.families.lpmpc.tables import timing_section
+
+    return timing_section(spec, solution)
+
+
+def _bench(spec, args, planner):
+    from convexguid.families.lpmpc.bench import bench_command
+
+    return bench_command(spec, args, planner)
+
+
+def _estimate_size(spec):
+    from convexguid.families.lpmpc.solve import estimate_size
+
+    return estimate_size(spec)
 
 
 FAMILY = Family(
     name="lpmpc",
     spec_model=LpmpcProblem,
     solve=_solve,
-    plot=lazy("convexguid.families.lpmpc.plots:plot_lpmpc"),
+    plot=_plot,
     verification_method="the nominal's dense re-propagation and the closed-loop LPMPC flight",
     figures=LpmpcFigures,
     simulated=True,
-    report_section=lazy("convexguid.families.lpmpc.tables:report_section"),
-    timing_section=lazy("convexguid.families.lpmpc.tables:timing_section"),
-    bench=lazy("convexguid.families.lpmpc.bench:bench_command"),
-    estimate_size=lazy("convexguid.families.lpmpc.solve:estimate_size"),
+    report_section=_report_section,
+    timing_section=_timing_section,
+    bench=_bench,
+    estimate_size=_estimate_size,
     key_figures=(
         ("nominal_energy_N2m2s", "nominal plan: energy integral of squared torque, N^2 m^2 s"),
         ("lpmpc_energy_N2m2s", "LPMPC closed loop: energy, N^2 m^2 s"),

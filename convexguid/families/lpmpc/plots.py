@@ -15,9 +15,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from convexguid.figure_files import Save  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
-Save = Callable[..., Path]
 AXES = ("roll", "pitch", "yaw")
 
 

@@ -7,27 +7,33 @@ file), ``figures`` (summary figures of the simulation), ``console`` (what the co
 
 from __future__ import annotations
 
-from convexguid.families.base import Family, lazy
+from convexguid.families.base import Family
 from convexguid.families.potential_function.console import header, sweep_lines
 from convexguid.families.potential_function.figures import PotentialFunctionFigures
 from convexguid.families.potential_function.spec import PotentialFunctionProblem, estimate_size
 
+# The hooks below import their modules when first called, so that reading a problem file loads neither the
+# SCP engine nor matplotlib nor CasADi (each import inside a function here is for that reason only).
+
 
 def _solve(spec, log, planner):
-    """Simulate the closed loop (``log`` and ``planner`` are unused: no SCP iterations, no other problem's plan).
-
-    The simulation modules are imported here, at the first run: loading a problem file stays light.
-    """
+    """Simulate the closed loop (``log`` and ``planner`` are unused: no SCP iterations, no other problem's plan)."""
     from convexguid.families.potential_function.runner import simulate_problem
 
     return simulate_problem(spec)
+
+
+def _plot(solution, out_dir, save):
+    from convexguid.families.potential_function.plots import plot_potential_function
+
+    return plot_potential_function(solution, out_dir, save)
 
 
 FAMILY = Family(
     name="potential_function",
     spec_model=PotentialFunctionProblem,
     solve=_solve,
-    plot=lazy("convexguid.families.potential_function.plots:plot_potential_function"),
+    plot=_plot,
     verification_method="closed-loop simulation",
     figures=PotentialFunctionFigures,
     simulated=True,

@@ -8,7 +8,6 @@ scale (with the 1 deg and 0.1 deg bands of the maneuver times) and, for a sweep,
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -18,9 +17,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from convexguid.families.potential_function.runner import sweep_column  # noqa: E402
+from convexguid.figure_files import Save  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 
-Save = Callable[..., Path]
 """``save(fig, ax, title, ylabel, path)``: label a time-history axis, write the figure and close it."""
 
 

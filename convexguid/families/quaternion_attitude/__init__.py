@@ -9,19 +9,53 @@ grid size).
 
 from __future__ import annotations
 
-from convexguid.families.base import Family, lazy
+from convexguid.families.base import Family
 from convexguid.families.quaternion_attitude.figures import QuaternionAttitudeFigures
 from convexguid.families.quaternion_attitude.spec import QuaternionAttitudeProblem, estimate_size
+
+# The hooks below import their modules when first called, so that reading a problem file loads neither the
+# SCP engine nor matplotlib nor CasADi (each import inside a function here is for that reason only).
+
+
+def _solve(spec, log, planner):
+    from convexguid.families.quaternion_attitude.solve import solve_quaternion_attitude
+
+    return solve_quaternion_attitude(spec, log, planner)
+
+
+def _plot(solution, out_dir, save):
+    from convexguid.families.quaternion_attitude.plots import plot_quaternion_attitude
+
+    return plot_quaternion_attitude(solution, out_dir, save)
+
+
+def _planning_setup(spec):
+    from convexguid.families.quaternion_attitude.solve import planning_setup
+
+    return planning_setup(spec)
+
+
+def _bench(spec, args, planner):
+    from convexguid.families.quaternion_attitude.bench import bench_command
+
+    return bench_command(spec, args, planner)
+
+
+def _independent_optimum(spec, solution, starts):
+    from convexguid.families.quaternion_attitude.crosscheck import independent_optimum
+
+    return independent_optimum(spec, solution, starts)
+
 
 FAMILY = Family(
     name="quaternion_attitude",
     spec_model=QuaternionAttitudeProblem,
-    solve=lazy("convexguid.families.quaternion_attitude.solve:solve_quaternion_attitude"),
-    plot=lazy("convexguid.families.quaternion_attitude.plots:plot_quaternion_attitude"),
-    planning_setup=lazy("convexguid.families.quaternion_attitude.solve:planning_setup"),
+    solve=_solve,
+    plot=_plot,
+    planning_setup=_planning_setup,
     verification_method="SciPy DOP853 re-propagation of the plan",
     figures=QuaternionAttitudeFigures,
-    bench=lazy("convexguid.families.quaternion_attitude.bench:bench_command"),
-    independent_optimum=lazy("convexguid.families.quaternion_attitude.crosscheck:independent_optimum"),
+    bench=_bench,
+    independent_optimum=_independent_optimum,
     estimate_size=estimate_size,
 )

@@ -172,7 +172,7 @@ def _scp_row(spec, objective: str, repeat: int) -> tuple[AttitudeBenchRow, Solut
 def _ipopt_row(case: AttitudeCase, intervals: int, objective: str, repeat: int, solver: str = _IPOPT,
                start: tuple[np.ndarray, float] | None = None) -> AttitudeBenchRow:
     """IPOPT on the NLP of ``case`` from ``start`` (default: the eigenaxis guess); ``setup s`` the fastest build."""
-    from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt
+    from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt  # CasADi
 
     guess, tf_guess = eigenaxis_start(case, intervals) if start is None else start
     try:

@@ -22,7 +22,7 @@ the limits drawn are the summary's); without cones only the time histories and a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,13 +33,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from numpy.typing import ArrayLike, NDArray  # noqa: E402
 
-from convexguid.figure_files import write_figure  # noqa: E402
+from convexguid.figure_files import Save, write_figure  # noqa: E402
 from convexguid.geometry import eigenaxis_path  # noqa: E402
 from convexguid.rotations import quat_conjugate, quat_rotate  # noqa: E402
 from convexguid.solution import Solution  # noqa: E402
 from convexguid.verification import TORQUE_AXIS_CHECKS  # noqa: E402
 
-Save = Callable[..., Path]
 """``save(fig, ax, title, ylabel, path)``: label a time-history axis, write the figure and close it."""
 
 DEFAULT_BORESIGHT = np.array([0.0, 0.0, 1.0])

@@ -144,7 +144,7 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
     ValueError
         If ``guess`` is not ``(K + 1, 10)``.
     """
-    import casadi as ca
+    import casadi as ca  # optional (the bench and test extras): loaded when IPOPT is asked for
 
     start = time.perf_counter()
     K, n1 = intervals, intervals + 1

@@ -8,16 +8,50 @@ convexification, one SOCP), ``solve`` (either method, verification, certificate,
 
 from __future__ import annotations
 
-from convexguid.families.base import Family, lazy
+from convexguid.families.base import Family
 from convexguid.families.rendezvous.figures import RendezvousFigures
 from convexguid.families.rendezvous.spec import RendezvousProblem, estimate_size
+
+# The hooks below import their modules when first called, so that reading a problem file loads neither the
+# SCP engine nor matplotlib nor CasADi (each import inside a function here is for that reason only).
+
+
+def _solve(spec, log, planner):
+    from convexguid.families.rendezvous.solve import solve_rendezvous
+
+    return solve_rendezvous(spec, log, planner)
+
+
+def _plot(solution, out_dir, save):
+    from convexguid.families.rendezvous.plots import plot_rendezvous
+
+    return plot_rendezvous(solution, out_dir, save)
+
+
+def _planning_setup(spec):
+    from convexguid.families.rendezvous.solve import planning_setup
+
+    return planning_setup(spec)
+
+
+def _bench(spec, args, planner):
+    from convexguid.families.rendezvous.bench import bench_command
+
+    return bench_command(spec, args, planner)
+
+
+def _independent_optimum(spec, solution, starts):
+    from convexguid.families.rendezvous.crosscheck import independent_optimum
+
+    return independent_optimum(spec, solution, starts)
+
 
 FAMILY = Family(
     name="rendezvous",
     spec_model=RendezvousProblem,
-    solve=lazy("convexguid.families.rendezvous.solve:solve_rendezvous"),
-    plot=lazy("convexguid.families.rendezvous.plots:plot_rendezvous"),
-    planning_setup=lazy("convexguid.families.rendezvous.solve:planning_setup"),
+    solve=_solve,
+    plot=_plot,
+    planning_setup=_planning_setup,
     verification_method="SciPy DOP853 re-propagation of the plan",
     figures=RendezvousFigures,
     key_figures=(
@@ -28,7 +62,7 @@ FAMILY = Family(
         ("lcvx_gap_rel", "(scp_arcs - lcvx) / lcvx"),
         ("planned_direction_norm_min", "smallest norm of the interpolated direction on burns (1 at nodes)"),
     ),
-    bench=lazy("convexguid.families.rendezvous.bench:bench_command"),
-    independent_optimum=lazy("convexguid.families.rendezvous.crosscheck:independent_optimum"),
+    bench=_bench,
+    independent_optimum=_independent_optimum,
     estimate_size=estimate_size,
 )

@@ -177,7 +177,7 @@ def solve_rendezvous_arcs_ipopt(program: ArcsProgram, x0: np.ndarray | None = No
     """
     if program.layout.lead_coast or program.layout.trail_coast:
         raise NotImplementedError("the IPOPT reference writes the paper's burn - coast - burn arcs only")
-    import casadi as ca
+    import casadi as ca  # optional (the bench and test extras): loaded when IPOPT is asked for
 
     start = time.perf_counter()
     case, lay = program.case, program.layout
