@@ -21,7 +21,7 @@ from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution
 from convexguid.validation import comparisons
 from convexguid.validation.comparisons import TABLES, check_comparisons, comparison_sections, comparison_timings
-from convexguid.validation.run import CaseResult, link_overrides, run_order
+from convexguid.validation.run import CaseResult, link_values, run_order
 from convexguid.verification import ConstraintCheck, Verification
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
@@ -157,10 +157,10 @@ def test_a_link_to_a_missing_case_or_figure_is_refused_before_solving(tmp_path):
 def test_link_overrides_pass_the_figure_in():
     spec, controller = load_problem(GUO_ENERGY), load_problem(GUO[0])
     sol = _solution(controller, maneuver_time_01deg_s=196.8)
-    assert link_overrides(spec, {controller.name: sol}) == ["boundary.tf_from=null", "boundary.tf_s=196.8"]
-    assert link_overrides(load_problem(GUO[1]), {}) == []
+    assert link_values(spec, {controller.name: sol}) == {"boundary.tf_from": None, "boundary.tf_s": 196.8}
+    assert link_values(load_problem(GUO[1]), {}) == {}
     with pytest.raises(SpecError, match="has no finite maneuver_time_01deg_s"):
-        link_overrides(spec, {controller.name: _solution(controller, maneuver_time_01deg_s=None)})
+        link_values(spec, {controller.name: _solution(controller, maneuver_time_01deg_s=None)})
 
 
 # --- rendering --------------------------------------------------------------------------------------------

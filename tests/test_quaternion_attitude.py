@@ -15,6 +15,7 @@ from convexguid.families.quaternion_attitude.solve import build_case, scp_settin
 from convexguid.problem_files import load_problem
 from convexguid.rotations import quat_sign_continuous
 from convexguid.scp.engine import solve_scp
+from convexguid.spec import with_values
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 MULTICONE = PROBLEMS / "wang_multicone_time.yaml"
@@ -145,7 +146,7 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
     table renders the three results it is given, in that order, and solves nothing itself.
     """
     from convexguid.validation.comparisons import comparison_sections
-    from convexguid.validation.run import CaseResult, link_overrides
+    from convexguid.validation.run import CaseResult, link_values
 
     # The files' own 50-interval grid: on a 16-interval grid the minimum-energy SCP ends in a slow tail
     # (the path grazes the forbidden cone at a node and a midpoint; 80-140 iterations), which would make
@@ -155,9 +156,9 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
     controller = solve(controller_spec)
     tf = controller.figures.maneuver_time_01deg_s
     energy_file = PROBLEMS / "guo2011_scp_energy.yaml"
-    linked = link_overrides(load_problem(energy_file), {controller_spec.name: controller})
-    assert linked == ["boundary.tf_from=null", f"boundary.tf_s={float(tf)!r}"]
-    energy_spec = load_problem(energy_file, coarse + linked)
+    linked = link_values(load_problem(energy_file), {controller_spec.name: controller})
+    assert linked == {"boundary.tf_from": None, "boundary.tf_s": float(tf)}
+    energy_spec = with_values(load_problem(energy_file, coarse), linked)
     time_spec = load_problem(GUO, coarse)
     energy_plan, time_plan = solve(energy_spec), solve(time_spec)
     assert energy_plan.ok and time_plan.ok

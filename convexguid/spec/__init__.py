@@ -7,6 +7,6 @@ shared by every family are in :mod:`convexguid.spec.common`; each family's model
 (``convexguid/families/<name>/spec.py``).
 """
 
-from convexguid.spec.loader import ProblemSpec, apply_overrides, with_overrides
+from convexguid.spec.loader import ProblemSpec, apply_overrides, with_overrides, with_values
 
-__all__ = ["ProblemSpec", "apply_overrides", "with_overrides"]
+__all__ = ["ProblemSpec", "apply_overrides", "with_overrides", "with_values"]

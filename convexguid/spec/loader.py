@@ -178,11 +178,10 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
     SpecError
         If an override is malformed, its value is not YAML, or its path does not exist.
     """
-    result = copy.deepcopy(dict(data))
+    values: list[tuple[str, Any, str]] = []
     for override in overrides:
         key, sep, raw = override.partition("=")
-        parts = key.strip().split(".")
-        if not sep or not all(parts):
+        if not sep or not all(key.strip().split(".")):
             raise SpecError(f"{source}: malformed override (got {override!r}); "
                             "write key.path=value, e.g. boundary.tf_s=25")
         try:
@@ -190,6 +189,28 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
         except yaml.YAMLError:
             raise SpecError(f"{source}: {key}: override value is not valid YAML (got {raw!r}); "
                             "give a YAML number, string, list or mapping") from None
+        values.append((key.strip(), value, f"override {override!r}"))
+    return _set_values(data, values, source)
+
+
+def set_values(data: Mapping[str, Any], values: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """A copy of the raw problem data with the value at each dotted key replaced, as :func:`apply_overrides`
+    does, but with values already made (a number computed in this process is not written out as text and read
+    back).
+
+    Raises
+    ------
+    SpecError
+        If a key path does not exist (a missing last key of a mapping is added).
+    """
+    return _set_values(data, [(key, value, f"value {value!r}") for key, value in values.items()], source)
+
+
+def _set_values(data: Mapping[str, Any], values: Sequence[tuple[str, Any, str]], source: str) -> dict[str, Any]:
+    """``data`` deep-copied with each ``(dotted key, value, what)`` applied in order (``what`` names it in errors)."""
+    result = copy.deepcopy(dict(data))
+    for key, value, what in values:
+        parts = key.split(".")
         node: Any = result
         for depth, part in enumerate(parts):
             last = depth == len(parts) - 1
@@ -198,7 +219,7 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
                 if part not in node and not last:
                     names = ", ".join(map(_key_text, node)) or "none"
                     parent = _dotted(parts[:depth]) or "the top level"
-                    raise SpecError(f"{source}: {here}: key does not exist (got override {override!r}); "
+                    raise SpecError(f"{source}: {here}: key does not exist (got {what}); "
                                     f"existing keys under {parent}: {names}")
                 if last:
                     node[part] = value
@@ -207,14 +228,13 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
             elif isinstance(node, list):
                 if not part.isdigit() or int(part) >= len(node):
                     valid = f"valid indices: 0 to {len(node) - 1}" if node else "the list is empty"
-                    raise SpecError(f"{source}: {here}: list index does not exist "
-                                    f"(got override {override!r}); {valid}")
+                    raise SpecError(f"{source}: {here}: list index does not exist (got {what}); {valid}")
                 if last:
                     node[int(part)] = value
                 else:
                     node = node[int(part)]
             else:
-                raise SpecError(f"{source}: {here}: key does not exist (got override {override!r}); "
+                raise SpecError(f"{source}: {here}: key does not exist (got {what}); "
                                 f"{_dotted(parts[:depth])} is a {type(node).__name__}, not a mapping or list")
     return result
 
@@ -247,6 +267,17 @@ def with_overrides(spec: ProblemSpec, overrides: Sequence[str]) -> ProblemSpec:
         If an override does not apply or the result is invalid.
     """
     return validate_as(type(spec), apply_overrides(spec._data, overrides, spec.source), spec.source)
+
+
+def with_values(spec: ProblemSpec, values: Mapping[str, Any]) -> ProblemSpec:
+    """``spec`` validated again, by its own model, with the value at each dotted key replaced (:func:`set_values`).
+
+    Raises
+    ------
+    SpecError
+        If a key does not exist or the result is invalid.
+    """
+    return validate_as(type(spec), set_values(spec._data, values, spec.source), spec.source)
 
 
 def validate_as(model: type[ProblemBase], data: Mapping[str, Any], source: str) -> ProblemSpec:

@@ -28,9 +28,10 @@ from __future__ import annotations
 
 import math
 import tempfile
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from convexguid.api import solve
 from convexguid.errors import SpecError
@@ -40,7 +41,7 @@ from convexguid.outputs import check_output_file, check_output_folder, staged_fo
 from convexguid.problem_files import load_problem
 from convexguid.solution import Solution
 from convexguid.solution_plots import plot_solution
-from convexguid.spec import ProblemSpec
+from convexguid.spec import ProblemSpec, with_values
 from convexguid.validation.comparisons import check_comparisons, comparison_sections, comparison_timings
 from convexguid.validation.reproduction import LineDifference, reconcile
 from convexguid.validation.timings import render_timings, timings_path
@@ -99,13 +100,17 @@ def compare(spec: ProblemSpec, solution: Solution) -> tuple[Comparison, ...]:
     return tuple(rows)
 
 
-def run_case(path: Path, figure_root: Path, overrides: Sequence[str] = (), publish: bool = True) -> CaseResult:
-    """Solve one case, compare it, and draw its pictures.
+def run_case(path: Path, figure_root: Path, values: Mapping[str, Any] | None = None,
+             publish: bool = True) -> CaseResult:
+    """Solve one case (``values``: keys set from other cases' results, :func:`link_values`), compare it, and draw
+    its pictures.
 
     With ``publish`` the case's figures folder ``figure_root/<name>`` is replaced as a whole, the committed
     pictures that show the same kept; without it they are drawn in a temporary folder and nothing is written.
     """
-    spec = load_problem(path, overrides)
+    spec = load_problem(path)
+    if values:
+        spec = with_values(spec, values)
     solution = solve(spec)
     folder = figure_root / spec.name
     if publish:
@@ -163,11 +168,11 @@ def run_order(specs: Sequence[ProblemSpec]) -> list[int]:
     return order
 
 
-def link_overrides(spec: ProblemSpec, solved: dict[str, Solution]) -> list[str]:
-    """Overrides that resolve ``spec``'s input links from the solutions of the cases they name, by name.
+def link_values(spec: ProblemSpec, solved: dict[str, Solution]) -> dict[str, Any]:
+    """The values that resolve ``spec``'s input links from the solutions of the cases they name, by dotted key.
 
-    Each link ``<link_key>: {problem, figure}`` giving ``<key>`` becomes ``<link_key>=null`` and
-    ``<key>=<that problem's figure>`` (:meth:`~convexguid.solution.Solution.figure`).
+    Each link ``<link_key>: {problem, figure}`` giving ``<key>`` sets ``<link_key>`` to None and ``<key>`` to that
+    problem's figure (:meth:`~convexguid.solution.Solution.figure`), the number itself (no text round trip).
 
     Raises
     ------
@@ -175,15 +180,15 @@ def link_overrides(spec: ProblemSpec, solved: dict[str, Solution]) -> list[str]:
         If the named result lacks the figure or it is not a finite number (e.g. the maneuver was never
         completed).
     """
-    overrides = []
+    values: dict[str, Any] = {}
     for key, link_key, link in spec.input_links():
         linked = solved[link.problem]
         value = linked.figure(link.figure) if link.figure in linked.figure_names() else None
         if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
             raise SpecError(f"{spec.source}: {link_key}: the result of {link.problem!r} has no finite "
                             f"{link.figure} (got {value!r}); fix that case, or set {key} in this file")
-        overrides += [f"{link_key}=null", f"{key}={float(value)!r}"]
-    return overrides
+        values.update({link_key: None, key: float(value)})
+    return values
 
 
 def reference_problems(directory: Path = DEFAULT_PROBLEMS_DIR) -> list[Path]:
@@ -203,7 +208,7 @@ def check_report_outputs(report: str | Path) -> None:
 def validate(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_REPORT) -> list[CaseResult]:
     """Run the reference cases (default: every file in ``problems/`` with a reference) and write the report.
 
-    Cases are solved in :func:`run_order` (linked inputs resolved by :func:`link_overrides`); the results,
+    Cases are solved in :func:`run_order` (linked inputs resolved by :func:`link_values`); the results,
     the report's rows and its comparison tables keep the order of ``problems``. A committed line the fresh
     report agrees with is kept (:func:`~convexguid.validation.reproduction.reconcile`). The compute times go to
     :func:`~convexguid.validation.timings.timings_path` beside the report.
@@ -246,7 +251,7 @@ def _run_all(problems: Iterable[str | Path], figure_root: Path, publish: bool) -
     results: dict[int, CaseResult] = {}
     solved: dict[str, Solution] = {}
     for i in order:
-        results[i] = run_case(paths[i], figure_root, link_overrides(specs[i], solved), publish=publish)
+        results[i] = run_case(paths[i], figure_root, link_values(specs[i], solved), publish=publish)
         solved[specs[i].name] = results[i].solution
     return [results[i] for i in range(len(paths))]
 

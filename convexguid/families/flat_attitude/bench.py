@@ -32,7 +32,7 @@ from convexguid.outputs import write_text_atomic
 from convexguid.reference import casadi_available
 from convexguid.scp.engine import SCPResult, solve_scp
 from convexguid.scp.problem import SCPSettings
-from convexguid.spec import with_overrides
+from convexguid.spec import with_values
 
 DEFAULT_NODES = (16, 32, 64, 128)
 """Polynomial degrees :math:`N` ``convexguid bench`` times when ``--nodes`` is not given."""
@@ -141,9 +141,9 @@ def bench_nodes(spec, nodes: int, repeat: int, backends: Sequence[str],
     """
     rows: list[BenchRow] = []
     for label, nodes_only in NLP_VARIANTS:
-        overrides = [f"discretization.nodes={nodes}"] + (["discretization.check_points_per_interval=0"]
-                                                         if nodes_only else [])
-        variant = with_overrides(spec, overrides)
+        values = {"discretization.nodes": nodes} | ({"discretization.check_points_per_interval": 0}
+                                                    if nodes_only else {})
+        variant = with_values(spec, values)
         problem = build_problem(variant)
         program = FlatAttitudeProgram(problem)
         x0 = program.initial_guess()

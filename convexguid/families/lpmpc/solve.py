@@ -37,7 +37,7 @@ from convexguid.rotations import mrp_to_quat, quat_angle_between, quat_to_euler3
 from convexguid.scp.problem import ProgramSize
 from convexguid.sizes import PROCESS_BYTES, SizeEstimate
 from convexguid.solution import Solution, Trajectory, make_solution
-from convexguid.spec.loader import apply_overrides, read_yaml_mapping, value_at
+from convexguid.spec.loader import apply_overrides, read_yaml_mapping, value_at, with_values
 from convexguid.threads import pool_worker_init
 from convexguid.verification import ConstraintCheck, Verification
 
@@ -66,10 +66,10 @@ def load_nominal_spec(spec, planner: Planner):
                         f"{' or '.join(NOMINAL_FAMILIES)}, whose plan LPMPC can fly")
     if spec.nominal.tf_s is None:
         return nominal_spec
-    timed = [f"boundary.tf_s={spec.nominal.tf_s!r}"]
+    timed: dict[str, float | None] = {"boundary.tf_s": spec.nominal.tf_s}
     if getattr(nominal_spec.boundary, "tf_from", None) is not None:
-        timed.append("boundary.tf_from=null")
-    return planner.load(path, [*spec.nominal.set, *timed])
+        timed["boundary.tf_from"] = None
+    return with_values(nominal_spec, timed)
 
 
 BYTES_PER_LAW_STEP = 250

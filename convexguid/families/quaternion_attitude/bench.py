@@ -43,7 +43,7 @@ from convexguid.families.quaternion_attitude.solve import (
 )
 from convexguid.reference import casadi_available
 from convexguid.solution import Solution, write_text_atomic
-from convexguid.spec import with_overrides
+from convexguid.spec import with_values
 
 DEFAULT_INTERVALS = (20, 30, 50, 80)
 """Hermite-Simpson interval counts benchmarked by default."""
@@ -126,11 +126,10 @@ def _failed(intervals: int | None, solver: str, objective: str, exc: Exception) 
 
 def _variant(spec, intervals: int, tf: float | None = None):
     """``spec`` at ``intervals`` with SCP from the eigenaxis guess: minimum time, or minimum energy at ``tf``."""
-    overrides = [f"discretization.intervals={intervals}", "method=scp", "initial_guess=eigenaxis",
-                 "boundary.tf_min_time_factor=null", "boundary.tf_from=null"]  # the bench sets the final time
-    overrides += ["objective=time", "boundary.tf_s=null"] if tf is None else ["objective=energy",
-                                                                             f"boundary.tf_s={tf!r}"]
-    return with_overrides(spec, overrides)
+    values = {"discretization.intervals": intervals, "method": "scp", "initial_guess": "eigenaxis",
+              "boundary.tf_min_time_factor": None, "boundary.tf_from": None,  # the bench sets the final time
+              "objective": "time" if tf is None else "energy", "boundary.tf_s": tf}
+    return with_values(spec, values)
 
 
 def _solution_nodes(sol: Solution) -> np.ndarray:
