@@ -1,7 +1,12 @@
-"""What every family's ``convexguid bench`` shares: table cells and grids, best-of timing, the environment lines.
+"""The skeleton every family's ``convexguid bench`` shares; each family supplies only its rows and columns.
 
-Each family's benchmark lives in its package (``convexguid/families/<name>/bench.py``) and is
-reached through :attr:`convexguid.families.base.Family.bench`.
+A benchmark times methods on one problem (the SCP, IPOPT on the same NLP, the family's own alternatives) and
+writes one markdown document. Shared here: running a method ``repeat`` times and keeping the fastest, or a
+``failed: ...`` row when it raises (:func:`timed_method`); IPOPT's success and the note when CasADi is missing
+(:func:`ipopt_outcome`, :func:`ipopt_availability`); table cells and grids; the document (title, machine,
+versions, threads, date, command, caption, table, notes: :func:`bench_document`). Each family's benchmark lives
+in its package (``convexguid/families/<name>/bench.py``) and is reached through
+:attr:`convexguid.families.base.Family.bench`.
 """
 
 from __future__ import annotations
@@ -11,9 +16,12 @@ import importlib.metadata
 import os
 import platform
 from collections.abc import Callable, Sequence
-from typing import TypeVar
+from typing import Any, TypeVar
+
+from convexguid.reference import casadi_available
 
 _T = TypeVar("_T")
+_R = TypeVar("_R")
 
 
 def cell(value: float | int | None, fmt: str) -> str:
@@ -62,3 +70,46 @@ def environment_lines(packages: Sequence[str]) -> list[str]:
         f"environment had {threads}",
         f"- Date: {when}",
     ]
+
+
+def failure(exc: BaseException) -> tuple[str, str]:
+    """``(status, message)`` of a method that raised: ``failed: <one line>`` for the table, the whole text."""
+    text = f"{type(exc).__name__}: {exc}"
+    return f"failed: {one_line(text)}", text
+
+
+def timed_method(repeat: int, run: Callable[[], _T], wall: Callable[[_T], float],
+                 row: Callable[[_T, list[_T]], _R], failed: Callable[[str, str], _R]) -> _R:
+    """The row of the fastest of ``repeat`` runs (``row(best, runs)``), or ``failed(status, message)`` when a run
+    raises: one failing method must not abort the benchmark."""
+    try:
+        best, runs = best_of(repeat, run, wall)
+    except Exception as exc:  # noqa: BLE001 - reported in the table, the benchmark goes on
+        return failed(*failure(exc))
+    return row(best, runs)
+
+
+def ipopt_outcome(result: Any) -> tuple[bool, str]:
+    """``(ok, message)`` of an IPOPT reference result (its ``success`` and ``status``)."""
+    return bool(result.success), "" if result.success else f"IPOPT returned {result.status}"
+
+
+def ipopt_availability(what: str) -> tuple[bool, str | None]:
+    """Whether IPOPT runs here (CasADi installed), and the document's note when it does not (``what``: the rows or
+    column left out)."""
+    if casadi_available():
+        return True, None
+    return False, f"IPOPT {what} skipped: casadi is not installed (pip install 'convexguid[bench]')."
+
+
+def bench_document(title: str, packages: Sequence[str], command: str, caption: str, table: str,
+                   notes: Sequence[str] = (), ipopt_note: str | None = None) -> str:
+    """A benchmark's markdown document: ``# title``, the machine and ``packages``' versions, the command, the
+    caption, IPOPT's note if any, the table and the ``notes`` as bullets."""
+    lines = [f"# {title}", "", *environment_lines(packages), f"- Command: `{command}`", "", caption]
+    if ipopt_note:
+        lines += ["", ipopt_note]
+    lines += ["", table, ""]
+    if notes:
+        lines += [f"- {note}" for note in notes] + [""]
+    return "\n".join(lines)

@@ -224,7 +224,7 @@ def test_flat_bench_exits_1_when_a_row_failed(monkeypatch, capsys):
     rows = [bench.BenchRow(16, "scp/osqp [nodes]", "solver_error", message="backend osqp failed"),
             bench.BenchRow(16, "scp/clarabel [nodes]", "converged", 0.26, 5, 0.1, ok=True)]
     monkeypatch.setattr(bench, "bench_nodes", lambda *args: rows)
-    monkeypatch.setattr(bench, "casadi_available", lambda: False)
+    monkeypatch.setattr("convexguid.bench_common.casadi_available", lambda: False)
     assert bench.run_bench(load_problem(FLAT), [16], 1, ["osqp", "clarabel"]) == 1
     monkeypatch.setattr(bench, "bench_nodes", lambda *args: rows[1:])
     assert bench.run_bench(load_problem(FLAT), [16], 1, ["clarabel"]) == 0

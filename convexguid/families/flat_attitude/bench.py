@@ -25,11 +25,18 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench_common import cell, environment_lines, markdown_grid, one_line
+from convexguid.bench_common import (
+    bench_document,
+    cell,
+    ipopt_availability,
+    ipopt_outcome,
+    markdown_grid,
+    one_line,
+    timed_method,
+)
 from convexguid.families.flat_attitude.program import FlatAttitudeProblem, FlatAttitudeProgram, build_problem
 from convexguid.families.flat_attitude.reference import solve_flat_attitude_ipopt
 from convexguid.outputs import write_text_atomic
-from convexguid.reference import casadi_available
 from convexguid.scp.engine import SCPResult, solve_scp
 from convexguid.scp.problem import SCPSettings
 from convexguid.spec import with_values
@@ -74,22 +81,16 @@ class BenchRow:
                 cell(self.overhead_s, ".4f"), cell(self.setup_s, ".4f"), cell(self.ratio, ".2f")]
 
 
-def _time_scp(program: FlatAttitudeProgram, settings: SCPSettings, x0: np.ndarray, repeat: int) -> SCPResult:
-    """Fastest of ``repeat`` SCP runs from ``x0``."""
-    runs = [solve_scp(program, settings, x0=x0) for _ in range(max(1, repeat))]
-    return min(runs, key=lambda r: r.wall_time_s)
-
-
 def _scp_row(nodes: int, backend: str, program: FlatAttitudeProgram, settings: SCPSettings,
              x0: np.ndarray, repeat: int) -> BenchRow:
-    method = f"scp/{backend}"
-    try:
-        r = _time_scp(program, settings, x0, repeat)
-    except Exception as exc:  # noqa: BLE001 - one failing backend must not abort the benchmark
-        return BenchRow(nodes, method, f"failed: {one_line(f'{type(exc).__name__}: {exc}')}",
-                        message=f"{type(exc).__name__}: {exc}")
-    return BenchRow(nodes, method, r.status, r.objective, r.iterations, r.wall_time_s, r.convexify_time_s,
-                    r.solver_time_s, r.overhead_time_s, ok=r.status == "converged", message=r.message)
+    """Fastest of ``repeat`` SCP runs from ``x0`` on one backend."""
+    def row(r: SCPResult, _) -> BenchRow:
+        return BenchRow(nodes, f"scp/{backend}", r.status, r.objective, r.iterations, r.wall_time_s,
+                        r.convexify_time_s, r.solver_time_s, r.overhead_time_s, ok=r.status == "converged",
+                        message=r.message)
+
+    return timed_method(repeat, lambda: solve_scp(program, settings, x0=x0), lambda r: r.wall_time_s, row,
+                        lambda status, message: BenchRow(nodes, f"scp/{backend}", status, message=message))
 
 
 def _ipopt_row(nodes: int, label: str, problem: FlatAttitudeProblem, x0: np.ndarray, repeat: int,
@@ -100,16 +101,16 @@ def _ipopt_row(nodes: int, label: str, problem: FlatAttitudeProblem, x0: np.ndar
     with check points it stays an MX graph of SX node functions (expanding it takes minutes at N = 128).
     """
     method = f"ipopt {label}"
-    try:
-        runs = [solve_flat_attitude_ipopt(problem, x0, IPOPT_TOLERANCE, nodes_only=nodes_only, expand=nodes_only)
-                for _ in range(max(1, repeat))]
-    except Exception as exc:  # noqa: BLE001 - report and go on
-        return BenchRow(nodes, method, f"failed: {one_line(f'{type(exc).__name__}: {exc}')}",
-                        message=f"{type(exc).__name__}: {exc}")
-    best = min(runs, key=lambda r: r.wall_time_s)
-    return BenchRow(nodes, method, best.status, best.objective, best.iterations, best.wall_time_s,
-                    setup_s=min(r.setup_time_s for r in runs), ok=best.success,
-                    message="" if best.success else f"IPOPT returned {best.status}")
+
+    def row(best, runs) -> BenchRow:
+        ok, message = ipopt_outcome(best)
+        return BenchRow(nodes, method, best.status, best.objective, best.iterations, best.wall_time_s,
+                        setup_s=min(r.setup_time_s for r in runs), ok=ok, message=message)
+
+    return timed_method(repeat, lambda: solve_flat_attitude_ipopt(problem, x0, IPOPT_TOLERANCE, nodes_only=nodes_only,
+                                                                  expand=nodes_only),
+                        lambda r: r.wall_time_s, row, lambda status, message: BenchRow(nodes, method, status,
+                                                                                       message=message))
 
 
 NLP_VARIANTS = (("[nodes]", True), ("[+checks]", False))
@@ -202,28 +203,17 @@ def _notes(rows: Sequence[BenchRow]) -> list[str]:
     return lines
 
 
-def _markdown(rows: Sequence[BenchRow], command: str, problem_path: str,
-              ipopt_note: str | None) -> str:
-    header = [
-        f"# convexguid benchmark: SCP vs IPOPT on `{Path(problem_path).name}`",
-        "",
-        *environment_lines(("numpy", "clarabel", "daqp", "osqp", "casadi")),
-        f"- Command: `{command}`",
-        "",
-        "Both methods solve the identical transcription (mapped Chebyshev) from the same initial guess, in two "
-        "variants: `[nodes]`, the torque box and the keep-out cones at the nodes only (the paper's NLP), and "
-        "`[+checks]`, also at the check points between them (what `convexguid solve` imposes); the dense-check "
-        "repairs of `convexguid solve` are not run. Times are the best of the repeats, in seconds. "
-        "For the SCP, `wall s` = `convexify s` (maps and Jacobians) + `solver s` (convex backend) "
-        "+ `overhead s` (assembly, bookkeeping), setup included. For IPOPT (CasADi, exact Hessian, MUMPS, "
-        f"tol = {IPOPT_TOLERANCE:g}; the `[nodes]` graph expanded to SX), `wall s` is the solve call only and "
-        "`setup s` builds the CasADi model. `IPOPT/SCP time` = IPOPT wall time / SCP wall time on the same NLP, "
-        "converged runs only (above 1: SCP faster).",
-    ]
-    if ipopt_note:
-        header += ["", ipopt_note]
-    footer = [f"- {line}" for line in _notes(rows)]
-    return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
+CAPTION = (
+    "Both methods solve the identical transcription (mapped Chebyshev) from the same initial guess, in two "
+    "variants: `[nodes]`, the torque box and the keep-out cones at the nodes only (the paper's NLP), and "
+    "`[+checks]`, also at the check points between them (what `convexguid solve` imposes); the dense-check "
+    "repairs of `convexguid solve` are not run. Times are the best of the repeats, in seconds. "
+    "For the SCP, `wall s` = `convexify s` (maps and Jacobians) + `solver s` (convex backend) "
+    "+ `overhead s` (assembly, bookkeeping), setup included. For IPOPT (CasADi, exact Hessian, MUMPS, "
+    f"tol = {IPOPT_TOLERANCE:g}; the `[nodes]` graph expanded to SX), `wall s` is the solve call only and "
+    "`setup s` builds the CasADi model. `IPOPT/SCP time` = IPOPT wall time / SCP wall time on the same NLP, "
+    "converged runs only (above 1: SCP faster).")
+"""The benchmark document's caption."""
 
 
 def run_bench(spec, nodes_list: Sequence[int] | None, repeat: int,
@@ -250,9 +240,7 @@ def run_bench(spec, nodes_list: Sequence[int] | None, repeat: int,
     """
     if nodes_list is None:
         nodes_list = DEFAULT_NODES
-    with_ipopt = casadi_available()
-    ipopt_note = None if with_ipopt else (
-        "IPOPT column skipped: casadi is not installed (pip install 'convexguid[bench]').")
+    with_ipopt, ipopt_note = ipopt_availability("column")
     if ipopt_note:
         print(ipopt_note)
     rows: list[BenchRow] = []
@@ -268,7 +256,9 @@ def run_bench(spec, nodes_list: Sequence[int] | None, repeat: int,
     if output_path is not None:
         command = _command(spec.source, nodes_list, repeat, backends, output_path)
         path = Path(output_path)
-        write_text_atomic(path, _markdown(rows, command, spec.source, ipopt_note))
+        write_text_atomic(path, bench_document(f"convexguid benchmark: SCP vs IPOPT on `{Path(spec.source).name}`",
+                                               ("numpy", "clarabel", "daqp", "osqp", "casadi"), command, CAPTION,
+                                               _markdown_table(rows), _notes(rows), ipopt_note))
         print(f"table written to {path}")
     return 0 if all(r.ok for r in rows) else 1
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench_common import environment_lines, markdown_grid
+from convexguid.bench_common import bench_document, markdown_grid
 from convexguid.dynamics.mrp_attitude import mrp_error_matrices
 from convexguid.errors import SpecError
 from convexguid.families.base import Planner
@@ -31,6 +31,10 @@ from convexguid.solution import write_text_atomic
 from convexguid.transcription.lgr import RadauGrid
 
 BENCH_NODES = (8, 10, 12)
+
+CAPTION = ("Update times are medians of 20 x `--repeat` calls on this machine; the Monte Carlo pair flies the same "
+           "seeded runs with both corrections.")
+"""The benchmark document's caption (the module docstring says what each table measures)."""
 
 
 def _box_update_ms(scenario, repeat: int) -> float:
@@ -86,10 +90,10 @@ def run_lpmpc_bench(spec, planner: Planner, repeat: int, runs: int, output: Path
     pair = markdown_grid(["LPMPC correction", "runs", "runs leaving the box (closed form)", "mean energy [N^2 m^2 s]",
                           "mean final angle error [deg]", "mean final rate error [deg/s]", "mean run time [s]"],
                          ["---"] + ["---:"] * 6, _monte_carlo_pair(spec, scenario, runs))
-    text = "\n".join([f"# LPMPC benchmark: {spec.name}", "", f"Command: `convexguid bench {spec.source} "
-                      f"--repeat {repeat} --runs {runs}`", "", *environment_lines(["numpy", "scipy", "clarabel"]), "",
-                      "## One command update", "", update, "",
-                      "## Closed-form against box-constrained correction (same seeds)", "", pair, ""])
+    tables = "\n".join(["## One command update", "", update, "",
+                         "## Closed-form against box-constrained correction (same seeds)", "", pair])
+    text = bench_document(f"LPMPC benchmark: {spec.name}", ["numpy", "scipy", "clarabel"],
+                          f"convexguid bench {spec.source} --repeat {repeat} --runs {runs}", CAPTION, tables)
     print(text)
     if output is not None:
         write_text_atomic(output, text)

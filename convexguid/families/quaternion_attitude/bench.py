@@ -33,7 +33,15 @@ from pathlib import Path
 
 import numpy as np
 
-from convexguid.bench_common import best_of, cell, environment_lines, markdown_grid, one_line
+from convexguid.bench_common import (
+    bench_document,
+    cell,
+    ipopt_availability,
+    ipopt_outcome,
+    markdown_grid,
+    one_line,
+    timed_method,
+)
 from convexguid.families.quaternion_attitude.path_transfer import plan_path_transfer
 from convexguid.families.quaternion_attitude.program import AttitudeCase, eigenaxis_start
 from convexguid.families.quaternion_attitude.solve import (
@@ -119,9 +127,9 @@ class AttitudeBenchRow:
                 "-" if self.verified is None else ("yes" if self.verified else "NO"), cell(self.margin_deg, ".4f")]
 
 
-def _failed(intervals: int | None, solver: str, objective: str, exc: Exception) -> AttitudeBenchRow:
-    text = f"{type(exc).__name__}: {exc}"
-    return AttitudeBenchRow(intervals, solver, objective, f"failed: {one_line(text)}", message=text)
+def _failed(intervals: int | None, solver: str, objective: str):
+    """The row a method that raised gets (for :func:`~convexguid.bench_common.timed_method`)."""
+    return lambda status, message: AttitudeBenchRow(intervals, solver, objective, status, message=message)
 
 
 def _variant(spec, intervals: int, tf: float | None = None):
@@ -141,31 +149,33 @@ def _solution_nodes(sol: Solution) -> np.ndarray:
 
 def _path_transfer_row(case: AttitudeCase, repeat: int) -> AttitudeBenchRow:
     """The path-transfer planner's maneuver time; ``wall s`` is its planning time."""
-    try:
-        plan, _ = best_of(repeat, lambda: plan_path_transfer(path_transfer_problem(case)),
-                           lambda p: p.planning_time_s)
-    except Exception as exc:  # noqa: BLE001 - one failing method must not abort the benchmark
-        return _failed(None, _PATH, "time", exc)
-    return AttitudeBenchRow(None, _PATH, "time", "converged", tf_s=plan.maneuver_time_s, iterations=len(plan.waypoints),
-                            wall_s=plan.planning_time_s, ok=True)
+    def row(plan, _) -> AttitudeBenchRow:
+        return AttitudeBenchRow(None, _PATH, "time", "converged", tf_s=plan.maneuver_time_s,
+                                iterations=len(plan.waypoints), wall_s=plan.planning_time_s, ok=True)
+
+    return timed_method(repeat, lambda: plan_path_transfer(path_transfer_problem(case)), lambda p: p.planning_time_s,
+                        row, _failed(None, _PATH, "time"))
 
 
 def _scp_row(spec, objective: str, repeat: int) -> tuple[AttitudeBenchRow, Solution | None]:
     """:func:`solve_quaternion_attitude` on ``spec``: ``wall s`` the whole call, ``SCP s`` its SCP iterations."""
     K = spec.discretization.intervals
-    try:
-        sol, _ = best_of(repeat, lambda: solve_quaternion_attitude(spec), lambda s: s.wall_time_s)
-    except Exception as exc:  # noqa: BLE001 - report and go on
-        return _failed(K, _SCP, objective, exc), None
-    ok = sol.status == "converged"
-    tf = sol.figures.maneuver_time_s
-    margin = sol.figures.node_constraint_margin_deg
-    row = AttitudeBenchRow(K, _SCP, objective, sol.status, tf_s=tf if ok else None,
-                           energy=sol.objective if ok and objective == "energy" else None, iterations=sol.iterations,
-                           wall_s=sol.wall_time_s, scp_s=sol.timing.get("scp_s"), solver_s=sol.timing.get("solver_s"),
-                           verified=None if sol.verification is None else sol.verification.passed,
-                           margin_deg=margin, ok=ok, message=sol.message)
-    return row, sol if ok else None
+    solved: list[Solution] = []
+
+    def row(sol: Solution, _) -> AttitudeBenchRow:
+        ok = sol.status == "converged"
+        if ok:
+            solved.append(sol)
+        return AttitudeBenchRow(K, _SCP, objective, sol.status, tf_s=sol.figures.maneuver_time_s if ok else None,
+                                energy=sol.objective if ok and objective == "energy" else None,
+                                iterations=sol.iterations, wall_s=sol.wall_time_s, scp_s=sol.timing.get("scp_s"),
+                                solver_s=sol.timing.get("solver_s"),
+                                verified=None if sol.verification is None else sol.verification.passed,
+                                margin_deg=sol.figures.node_constraint_margin_deg, ok=ok, message=sol.message)
+
+    scp = timed_method(repeat, lambda: solve_quaternion_attitude(spec), lambda s: s.wall_time_s, row,
+                       _failed(K, _SCP, objective))
+    return scp, solved[0] if solved else None
 
 
 def _ipopt_row(case: AttitudeCase, intervals: int, objective: str, repeat: int, solver: str = _IPOPT,
@@ -174,18 +184,19 @@ def _ipopt_row(case: AttitudeCase, intervals: int, objective: str, repeat: int, 
     from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt  # CasADi
 
     guess, tf_guess = eigenaxis_start(case, intervals) if start is None else start
-    try:
-        best, runs = best_of(repeat, lambda: solve_quaternion_attitude_ipopt(case, intervals, guess, tf_guess,
-                                                                              tol=IPOPT_TOLERANCE),
-                              lambda r: r.wall_time_s)
-    except Exception as exc:  # noqa: BLE001 - report and go on
-        return _failed(intervals, solver, objective, exc)
-    value = best.objective if best.success else None
-    tf = value if objective == "time" else (float(case.tf) if best.success else None)
-    return AttitudeBenchRow(intervals, solver, objective, best.status, tf_s=tf,
-                            energy=value if objective == "energy" else None, iterations=best.iterations,
-                            wall_s=best.wall_time_s, setup_s=min(r.setup_time_s for r in runs), ok=best.success,
-                            message="" if best.success else f"IPOPT returned {best.status}")
+
+    def row(best, runs) -> AttitudeBenchRow:
+        ok, message = ipopt_outcome(best)
+        value = best.objective if ok else None
+        tf = value if objective == "time" else (float(case.tf) if ok else None)
+        return AttitudeBenchRow(intervals, solver, objective, best.status, tf_s=tf,
+                                energy=value if objective == "energy" else None, iterations=best.iterations,
+                                wall_s=best.wall_time_s, setup_s=min(r.setup_time_s for r in runs), ok=ok,
+                                message=message)
+
+    return timed_method(repeat, lambda: solve_quaternion_attitude_ipopt(case, intervals, guess, tf_guess,
+                                                                       tol=IPOPT_TOLERANCE),
+                        lambda r: r.wall_time_s, row, _failed(intervals, solver, objective))
 
 
 def _with_gaps(rows: list[AttitudeBenchRow]) -> list[AttitudeBenchRow]:
@@ -349,12 +360,7 @@ def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str,
                             intervals_list: Sequence[int], repeat: int, ipopt_note: str | None = None,
                             output: str | PathLike[str] | None = None) -> str:
     """The benchmark as a markdown document: machine, versions, threads, date, command, caption, table, notes."""
-    header = [
-        f"# convexguid attitude benchmark: SCP vs IPOPT on `{Path(problem_path).name}` against the grid size",
-        "",
-        *environment_lines(("numpy", "scipy", "clarabel", "casadi")),
-        f"- Command: `{_command(problem_path, intervals_list, repeat, output)}`",
-        "",
+    caption = (
         f"Best of {repeat} runs per case, times in seconds. `K`: Hermite-Simpson intervals (K + 1 nodes). "
         "`path_transfer`: the path-transfer planner (independent of K), `wall s` its planning time, `iterations` "
         "its way-points. `scp`: `convexguid solve` with `initial_guess: eigenaxis` "
@@ -367,14 +373,13 @@ def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str,
         "solution instead (a lower value than `ipopt` means the eigenaxis start ended at a worse local "
         f"optimum). `energy` rows: minimum energy at tf = {ENERGY_TF_FACTOR:g} x the SCP minimum time of "
         "the same K; energy is Simpson's rule on the nodes' torque. `gap to ipopt` = (value - ipopt's) / "
-        "ipopt's, signed, same K and objective.",
-    ]
-    if ipopt_note:
-        header += ["", ipopt_note]
+        "ipopt's, signed, same K and objective.")
     align = ["---:", ":---", ":---"] + ["---:"] * (len(COLUMNS) - 3)
     table = markdown_grid(COLUMNS, align, [r.cells() for r in rows])
-    footer = [f"- {line}" for line in _notes(rows, SCP_WALL_TARGETS_S.get(Path(problem_path).name))]
-    return "\n".join(header + ["", table, ""] + (footer + [""] if footer else []))
+    return bench_document(
+        f"convexguid attitude benchmark: SCP vs IPOPT on `{Path(problem_path).name}` against the grid size",
+        ("numpy", "scipy", "clarabel", "casadi"), _command(problem_path, intervals_list, repeat, output), caption,
+        table, _notes(rows, SCP_WALL_TARGETS_S.get(Path(problem_path).name)), ipopt_note)
 
 
 def run_attitude_bench(spec, intervals_list: Sequence[int] = DEFAULT_INTERVALS,
@@ -388,9 +393,7 @@ def run_attitude_bench(spec, intervals_list: Sequence[int] = DEFAULT_INTERVALS,
         0 if every method that ran converged, else 1. Without ``casadi`` the IPOPT rows are
         skipped (noted in the document), which does not count as a failure.
     """
-    with_ipopt = casadi_available()
-    ipopt_note = None if with_ipopt else (
-        "IPOPT rows skipped: casadi is not installed (pip install 'convexguid[bench]').")
+    with_ipopt, ipopt_note = ipopt_availability("rows")
     rows = bench_attitude_rows(spec, intervals_list, repeat, with_ipopt, progress=True)
     text = attitude_bench_markdown(rows, spec.source, intervals_list, repeat, ipopt_note, output)
     print()

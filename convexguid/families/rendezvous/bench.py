@@ -35,7 +35,15 @@ from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 
-from convexguid.bench_common import best_of, cell, environment_lines, markdown_grid, one_line
+from convexguid.bench_common import (
+    bench_document,
+    cell,
+    ipopt_availability,
+    ipopt_outcome,
+    markdown_grid,
+    one_line,
+    timed_method,
+)
 from convexguid.families.rendezvous.arcs import ArcsProgram
 from convexguid.families.rendezvous.case import Rendezvous, RendezvousPlan, build_case
 from convexguid.families.rendezvous.lcvx import solve_lcvx
@@ -93,9 +101,9 @@ class RendezvousBenchRow:
                 cell(self.solver_s, ".4f"), cell(self.convexify_s, ".4f"), cell(self.setup_s, ".4f")]
 
 
-def _failed(method: str, exc: Exception) -> RendezvousBenchRow:
-    text = f"{type(exc).__name__}: {exc}"
-    return RendezvousBenchRow(method, f"failed: {one_line(text)}", message=text)
+def _failed(method: str):
+    """The row a method that raised gets (for :func:`~convexguid.bench_common.timed_method`)."""
+    return lambda status, message: RendezvousBenchRow(method, status, message=message)
 
 
 def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> RendezvousBenchRow:
@@ -105,48 +113,49 @@ def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> Rendez
         plan = solve_lcvx(case, steps, backend)
         return plan, time.perf_counter() - start
 
-    try:
-        (plan, wall), _ = best_of(repeat, run, lambda r: r[1])
-    except Exception as exc:  # noqa: BLE001 - one failing method must not abort the benchmark
-        return _failed("lcvx", exc)
-    ok = plan.status == "converged"
-    return RendezvousBenchRow("lcvx", plan.status, plan.objective if ok else None, plan.iterations, wall,
-                              plan.timing.get("solver_s"), ok=ok, message=plan.message)
+    def row(best, _) -> RendezvousBenchRow:
+        plan, wall = best
+        ok = plan.status == "converged"
+        return RendezvousBenchRow("lcvx", plan.status, plan.objective if ok else None, plan.iterations, wall,
+                                  plan.timing.get("solver_s"), ok=ok, message=plan.message)
+
+    return timed_method(repeat, run, lambda r: r[1], row, _failed("lcvx"))
 
 
 def _lcvx_cvxpy_row(case: Rendezvous, steps: int, repeat: int) -> RendezvousBenchRow:
     """The ``lcvx`` SOCP stated in cvxpy; wall = the whole call, setup = cvxpy's compile time."""
-    try:
-        r, _ = best_of(repeat, lambda: solve_lcvx_cvxpy(case, steps), lambda r: r.wall_time_s)
-    except Exception as exc:  # noqa: BLE001 - report and go on
-        return _failed(LCVX_CVXPY, exc)
-    return RendezvousBenchRow(LCVX_CVXPY, r.status, r.burn_time_s if r.optimal else None, r.iterations,
-                              r.wall_time_s, r.solve_time_s, setup_s=r.compile_time_s, ok=r.optimal,
-                              message="" if r.optimal else f"cvxpy returned {r.status}")
+    def row(r, _) -> RendezvousBenchRow:
+        return RendezvousBenchRow(LCVX_CVXPY, r.status, r.burn_time_s if r.optimal else None, r.iterations,
+                                  r.wall_time_s, r.solve_time_s, setup_s=r.compile_time_s, ok=r.optimal,
+                                  message="" if r.optimal else f"cvxpy returned {r.status}")
+
+    return timed_method(repeat, lambda: solve_lcvx_cvxpy(case, steps), lambda r: r.wall_time_s, row,
+                        _failed(LCVX_CVXPY))
 
 
 def _scp_row(program: ArcsProgram, settings: SCPSettings, repeat: int) -> RendezvousBenchRow:
     """``scp_arcs`` from the program's initial guess."""
-    try:
-        r, _ = best_of(repeat, lambda: solve_scp(program, settings), lambda r: r.wall_time_s)
-    except Exception as exc:  # noqa: BLE001 - report and go on
-        return _failed("scp_arcs", exc)
-    ok = r.status == "converged"
-    return RendezvousBenchRow("scp_arcs", r.status, r.objective if ok else None, r.iterations, r.wall_time_s,
-                              r.solver_time_s, r.convexify_time_s, ok=ok, message=r.message)
+    def row(r, _) -> RendezvousBenchRow:
+        ok = r.status == "converged"
+        return RendezvousBenchRow("scp_arcs", r.status, r.objective if ok else None, r.iterations, r.wall_time_s,
+                                  r.solver_time_s, r.convexify_time_s, ok=ok, message=r.message)
+
+    return timed_method(repeat, lambda: solve_scp(program, settings), lambda r: r.wall_time_s, row,
+                        _failed("scp_arcs"))
 
 
 def _ipopt_row(program: ArcsProgram, repeat: int) -> RendezvousBenchRow:
     """IPOPT on the arcs NLP from the program's initial guess; ``setup s`` is the fastest model build."""
     x0 = program.initial_guess()
-    try:
-        best, runs = best_of(repeat, lambda: solve_rendezvous_arcs_ipopt(program, x0, IPOPT_TOLERANCE),
-                              lambda r: r.wall_time_s)
-    except Exception as exc:  # noqa: BLE001 - report and go on
-        return _failed("ipopt", exc)
-    return RendezvousBenchRow("ipopt", best.status, best.objective if best.success else None, best.iterations,
-                              best.wall_time_s, setup_s=min(r.setup_time_s for r in runs), ok=best.success,
-                              message="" if best.success else f"IPOPT returned {best.status}")
+
+    def row(best, runs) -> RendezvousBenchRow:
+        ok, message = ipopt_outcome(best)
+        return RendezvousBenchRow("ipopt", best.status, best.objective if ok else None, best.iterations,
+                                  best.wall_time_s, setup_s=min(r.setup_time_s for r in runs), ok=ok,
+                                  message=message)
+
+    return timed_method(repeat, lambda: solve_rendezvous_arcs_ipopt(program, x0, IPOPT_TOLERANCE),
+                        lambda r: r.wall_time_s, row, _failed("ipopt"))
 
 
 def bench_rendezvous_rows(spec, repeat: int,
@@ -229,12 +238,7 @@ def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: 
     args = ["convexguid", "bench", problem_path, "--repeat", str(repeat)]
     command = shlex.join(args + (["--output", str(output)] if output is not None else []))
     steps = "the problem's `grid_steps`" if grid_steps is None else f"{grid_steps} steps"
-    header = [
-        f"# convexguid rendezvous benchmark: lcvx vs scp_arcs vs IPOPT on `{Path(problem_path).name}`",
-        "",
-        *environment_lines(("numpy", "scipy", "clarabel", "cvxpy", "casadi")),
-        f"- Command: `{command}`",
-        "",
+    caption = (
         f"Best of {repeat} runs per method, times in seconds. `lcvx`: one SOCP on {steps} (zero-order hold); "
         "`wall s` includes building it, `solver s` is the convex solver alone, `iterations` its interior-point "
         f"iterations. `{LCVX_CVXPY}`: the same SOCP stated in cvxpy with the states kept (a cross-check of the "
@@ -248,12 +252,10 @@ def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: 
         "zero-order-hold grid), so it is a discretization difference, not an optimality gap (for "
         f"`{LCVX_CVXPY}` it is the same program, so only the solvers' round-off). "
         f"Targets: lcvx solver time well under {LCVX_SOLVER_TARGET_S:g} s at 600 steps; scp_arcs wall time "
-        f"under {SCP_WALL_TARGET_S:g} s.",
-    ]
-    if ipopt_note:
-        header += ["", ipopt_note]
-    footer = [f"- {line}" for line in _notes(rows)]
-    return "\n".join(header + ["", _markdown_table(rows), ""] + (footer + [""] if footer else []))
+        f"under {SCP_WALL_TARGET_S:g} s.")
+    return bench_document(f"convexguid rendezvous benchmark: lcvx vs scp_arcs vs IPOPT on `{Path(problem_path).name}`",
+                          ("numpy", "scipy", "clarabel", "cvxpy", "casadi"), command, caption, _markdown_table(rows),
+                          _notes(rows), ipopt_note)
 
 
 def run_rendezvous_bench(spec, repeat: int,
@@ -275,9 +277,7 @@ def run_rendezvous_bench(spec, repeat: int,
         0 if every method that ran converged, else 1. Without ``casadi`` the IPOPT row is
         skipped (noted in the document), which does not count as a failure.
     """
-    with_ipopt = casadi_available()
-    ipopt_note = None if with_ipopt else (
-        "IPOPT row skipped: casadi is not installed (pip install 'convexguid[bench]').")
+    with_ipopt, ipopt_note = ipopt_availability("row")
     rows = bench_rendezvous_rows(spec, repeat, with_ipopt)
     text = rendezvous_bench_markdown(rows, spec.source, repeat, spec.discretization.grid_steps, ipopt_note, output)
     print(text, end="")
