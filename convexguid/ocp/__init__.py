@@ -1,0 +1,7 @@
+"""Your own guidance problem in Python: :class:`Problem` (states, controls, final time, dynamics, path constraints,
+objective), planned by the same SCP engine as the paper families and checked by the same dense SciPy
+re-propagation. See ``examples/`` and the README's "Your own problem"."""
+
+from convexguid.ocp.problem import Problem
+
+__all__ = ["Problem"]

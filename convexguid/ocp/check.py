@@ -1,0 +1,111 @@
+"""The dense check of a user's plan: the planned control re-propagated through the user's dynamics with SciPy.
+
+The control is the piecewise quadratic through each interval's node, midpoint and node values (what
+Hermite-Simpson assumes). :func:`scipy.integrate.solve_ivp` (DOP853, rtol 1e-10) integrates the dynamics interval
+by interval from the given initial state; on a grid of ``points`` samples per interval the path constraints and
+the state bounds are evaluated, and at the end the propagated state is compared with the stated final values
+(scaled by each state's scale). A failed path constraint is repaired by tightening it at the nodes and midpoints
+(:func:`~convexguid.scp.check_repair.grown_margin`) and re-solving warm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from convexguid.ocp.transcription import HermiteSimpsonProgram
+from convexguid.scp.check_repair import Check, Repair, grown_margin
+from convexguid.verification import ConstraintCheck, Verification
+
+FINAL_TOLERANCE = 1e-4
+"""Largest final-state error, as a share of each state's scale, of a verified plan."""
+
+PATH_TOLERANCE = 1e-6
+"""Largest excess over a path constraint or a state bound on the dense grid (the constraint's own unit)."""
+
+MARGIN_FLOOR = 1e-6
+"""Smallest tightening a repair adds to the path constraints."""
+
+
+@dataclass(frozen=True)
+class DenseTrack:
+    """The re-propagated trajectory: times, states ``(n, nx)``, controls ``(n, nu)``."""
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+
+
+class DenseChecker:
+    """:class:`~convexguid.scp.check_repair.PlanChecker` of a :class:`HermiteSimpsonProgram`."""
+
+    def __init__(self, points: int = 20) -> None:
+        self.points = points
+
+    def control(self, program: HermiteSimpsonProgram, z: np.ndarray):
+        """The planned control as a function of time (quadratic through node, midpoint, node on each interval)."""
+        nodes, mids = program.node_controls(z), program.midpoint_controls(z)
+        h = program.final_time(z) / program.N
+
+        def u(t: float) -> np.ndarray:
+            k = min(int(t // h), program.N - 1)
+            s = (t - k * h) / h
+            return (2 * (s - 0.5) * (s - 1) * nodes[k] - 4 * s * (s - 1) * mids[k] + 2 * s * (s - 0.5) * nodes[k + 1])
+
+        return u
+
+    def propagate(self, program: HermiteSimpsonProgram, z: np.ndarray) -> DenseTrack:
+        p = program.problem
+        rate = ca.Function("rate", [p.state_vector(), p.control_vector(), p.time], [p.rate_vector()])
+        u = self.control(program, z)
+        tf, N = program.final_time(z), program.N
+        state = program.states(z)[0].copy()
+        times, states = [], []
+        for k in range(N):
+            grid = np.linspace(k * tf / N, (k + 1) * tf / N, self.points + 1)
+            run = solve_ivp(lambda t, x: np.asarray(rate(x, u(t), t)).ravel(), (grid[0], grid[-1]), state,
+                            method="DOP853", t_eval=grid, rtol=1e-10, atol=1e-12)
+            keep = slice(None) if k == 0 else slice(1, None)
+            times.append(run.t[keep])
+            states.append(run.y.T[keep])
+            state = run.y[:, -1]
+        t = np.concatenate(times)
+        return DenseTrack(t, np.vstack(states), np.array([u(s) for s in t]).reshape(t.size, program.nu))
+
+    def check(self, program: HermiteSimpsonProgram, z: np.ndarray) -> Check:
+        p = program.problem
+        track = self.propagate(program, z)
+        checks = []
+        if p.constraints:
+            g = ca.Function("g", [p.state_vector(), p.control_vector(), p.time],
+                            [ca.vertcat(*(c.expression for c in p.constraints))])
+            values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
+                                                                                 strict=True)])
+            checks += [ConstraintCheck(c.name, float(values[:, j].max()), 0.0, "max")
+                       for j, c in enumerate(p.constraints)]
+        for i, v in enumerate(p.states):
+            if v.upper is not None:
+                checks.append(ConstraintCheck(f"{v.name}_max", float(track.x[:, i].max()), v.upper, "max"))
+            if v.lower is not None:
+                checks.append(ConstraintCheck(f"{v.name}_min", float(track.x[:, i].min()), v.lower, "min"))
+        final_errors = {f"final_{v.name}_error": abs(float(track.x[-1, i]) - v.final) / v.scale
+                        for i, v in enumerate(p.states) if v.final is not None}
+        worst_final = max(final_errors.values(), default=0.0)
+        passed = worst_final <= FINAL_TOLERANCE and all(c.violation <= PATH_TOLERANCE for c in checks)
+        verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed,
+                                    {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE})
+        return Check(verification, track)
+
+    def repair(self, program: HermiteSimpsonProgram, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
+        """Tighten the path constraints at the nodes by the worst excess between them (grown each round); a
+        final-state error (the transcription's) has no repair here: refine ``transcription(intervals=...)``."""
+        excess = max((c.violation for c in check.verification.checks if c.sense == "max"
+                      and not c.name.endswith("_max")), default=0.0)
+        if excess <= PATH_TOLERANCE:
+            return None
+        margin = program.margin + grown_margin(excess, attempt, MARGIN_FLOOR)
+        return Repair(HermiteSimpsonProgram(program.problem, margin), z,
+                      f"path constraints tightened by {margin:.3g} at the nodes")

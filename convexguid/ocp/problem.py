@@ -1,0 +1,219 @@
+"""An optimal control problem stated in Python: states, controls, a final time, dynamics, constraints, objective.
+
+A :class:`Problem` collects CasADi symbols and what the user says of them; :meth:`Problem.solve` transcribes it
+(Hermite-Simpson, :mod:`convexguid.ocp.transcription`), hands it to the SCP engine with the dense SciPy check
+(:mod:`convexguid.ocp.check`) and returns an :class:`~convexguid.ocp.result.OcpResult`.
+
+What stays exact in every subproblem: bounds on states, controls and the final time, and boundary values.
+What the engine linearizes, inside its trust region and exact penalty: the dynamics defects and the path
+constraints ``g(x, u) <= 0`` (keep-out zones, cones written as inequalities). Objectives: minimum time (a free
+final time), minimum energy (the integral of the squared controls, fixed final time).
+
+A problem stated wrongly is refused before any solve with one line naming the expression
+(:class:`~convexguid.errors.SpecError`): a name used twice, a dynamics entry for an unknown symbol or of the wrong
+size, a state without dynamics, a boundary value outside a bound, a free final time without bounds.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from convexguid.errors import SpecError
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A scalar state or control: its symbol, bounds (``None``: none), boundary values and typical magnitude."""
+
+    name: str
+    symbol: ca.SX
+    lower: float | None
+    upper: float | None
+    initial: float | None
+    final: float | None
+    scale: float
+    guess: float | None
+
+
+@dataclass(frozen=True)
+class PathConstraint:
+    """``expression <= 0`` at every node and midpoint (checked densely between them), in ``unit``."""
+
+    name: str
+    expression: ca.SX
+    unit: str
+
+
+def _number(where: str, value: object, allow_none: bool = True) -> float | None:
+    if value is None and allow_none:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SpecError(f"{where}: expected a finite number{' or None' if allow_none else ''} (got {value!r})")
+    return float(value)
+
+
+class Problem:
+    """An optimal control problem, stated step by step (see the module docstring and ``examples/``)."""
+
+    def __init__(self, name: str) -> None:
+        if not isinstance(name, str) or not name.strip():
+            raise SpecError(f"Problem: name: expected a non-empty string (got {name!r})")
+        self.name = name
+        self.states: list[Variable] = []
+        self.controls: list[Variable] = []
+        self.constraints: list[PathConstraint] = []
+        self.rates: dict[str, ca.SX] = {}
+        self.tf: float | None = None
+        self.tf_bounds: tuple[float, float] | None = None
+        self.tf_guess: float | None = None
+        self.objective: str | None = None
+        self.intervals = 30
+        self.time = ca.SX.sym("t")
+
+    # --- declarations -----------------------------------------------------------------------------------------
+    def _variable(self, kind: str, name: str, bounds, initial, final, scale, guess) -> Variable:
+        where = f"{self.name}: {kind} {name!r}"
+        if not isinstance(name, str) or not name.isidentifier():
+            raise SpecError(f"{self.name}: {kind} name: expected an identifier (got {name!r})")
+        if name in {v.name for v in (*self.states, *self.controls)}:
+            raise SpecError(f"{where}: the name is already taken; give every state and control its own name")
+        lower, upper = (None, None) if bounds is None else bounds
+        lower, upper = _number(f"{where}: lower bound", lower), _number(f"{where}: upper bound", upper)
+        if lower is not None and upper is not None and lower > upper:
+            raise SpecError(f"{where}: bounds: lower {lower:g} is above upper {upper:g}")
+        initial, final = _number(f"{where}: initial", initial), _number(f"{where}: final", final)
+        for label, value in (("initial", initial), ("final", final)):
+            if value is not None and ((lower is not None and value < lower) or (upper is not None and value > upper)):
+                raise SpecError(f"{where}: {label} value {value:g} is outside its bounds "
+                                f"[{lower if lower is not None else '-inf'}, {upper if upper is not None else 'inf'}]")
+        magnitudes = [abs(v) for v in (lower, upper, initial, final) if v is not None]
+        scale = _number(f"{where}: scale", scale) or max([*magnitudes, 0.0]) or 1.0
+        if scale <= 0:
+            raise SpecError(f"{where}: scale: must be positive (got {scale:g})")
+        return Variable(name, ca.SX.sym(name), lower, upper, initial, final, scale,
+                        _number(f"{where}: guess", guess))
+
+    def state(self, name: str, bounds: tuple[float | None, float | None] | None = None, initial: float | None = None,
+              final: float | None = None, scale: float | None = None) -> ca.SX:
+        """A scalar state; ``initial``/``final`` fix its boundary values (None: free). Returns its symbol."""
+        variable = self._variable("state", name, bounds, initial, final, scale, None)
+        self.states.append(variable)
+        return variable.symbol
+
+    def control(self, name: str, bounds: tuple[float | None, float | None] | None = None,
+                scale: float | None = None, guess: float | None = None) -> ca.SX:
+        """A scalar control (held as a piecewise quadratic through node and midpoint values). Returns its symbol."""
+        variable = self._variable("control", name, bounds, None, None, scale, guess)
+        self.controls.append(variable)
+        return variable.symbol
+
+    def final_time(self, fixed: float | None = None, bounds: tuple[float, float] | None = None,
+                   guess: float | None = None) -> None:
+        """The final time (the initial time is 0): ``fixed``, or free within ``bounds`` starting from ``guess``."""
+        where = f"{self.name}: final_time"
+        if (fixed is None) == (bounds is None):
+            raise SpecError(f"{where}: give either fixed=<seconds> or bounds=(lower, upper)")
+        if fixed is not None:
+            self.tf = _number(f"{where}: fixed", fixed, allow_none=False)
+            if self.tf <= 0:
+                raise SpecError(f"{where}: fixed: must be positive (got {self.tf:g})")
+            return
+        low, high = (_number(f"{where}: bounds", b, allow_none=False) for b in bounds)
+        if not 0 < low < high:
+            raise SpecError(f"{where}: bounds: expected 0 < lower < upper (got ({low:g}, {high:g}))")
+        self.tf_bounds = (low, high)
+        self.tf_guess = _number(f"{where}: guess", guess) or 0.5 * (low + high)
+
+    def dynamics(self, rates: Mapping[ca.SX, ca.SX]) -> None:
+        """``{state symbol: its rate}``, each rate an expression of states, controls and :attr:`time`."""
+        by_symbol = {str(v.symbol): v.name for v in self.states}
+        for symbol, rate in rates.items():
+            name = by_symbol.get(str(symbol))
+            if name is None:
+                raise SpecError(f"{self.name}: dynamics: {symbol} is not a state of this problem "
+                                f"(states: {', '.join(by_symbol.values()) or 'none'})")
+            rate = ca.SX(rate)
+            if rate.shape != (1, 1):
+                raise SpecError(f"{self.name}: dynamics of {name}: expected a scalar expression (got shape "
+                                f"{rate.shape})")
+            self.rates[name] = rate
+
+    def path_constraint(self, name: str, expression: ca.SX, unit: str = "") -> None:
+        """``expression <= 0`` along the whole trajectory (nonconvex allowed: the engine linearizes it)."""
+        expression = ca.SX(expression)
+        if expression.shape != (1, 1):
+            raise SpecError(f"{self.name}: path_constraint {name!r}: expected a scalar expression "
+                            f"(got shape {expression.shape}); state one constraint per call")
+        if name in {c.name for c in self.constraints}:
+            raise SpecError(f"{self.name}: path_constraint {name!r}: the name is already taken")
+        self.constraints.append(PathConstraint(name, expression, unit))
+
+    def minimize_time(self) -> None:
+        self.objective = "time"
+
+    def minimize_energy(self) -> None:
+        """Minimise the integral of the sum of the squared controls (a fixed final time)."""
+        self.objective = "energy"
+
+    def transcription(self, intervals: int) -> None:
+        """Hermite-Simpson on ``intervals`` equal intervals."""
+        if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < 2:
+            raise SpecError(f"{self.name}: transcription: intervals: expected an integer >= 2 (got {intervals!r})")
+        self.intervals = intervals
+
+    # --- checks and solve -------------------------------------------------------------------------------------
+    def check(self) -> None:
+        """Refuse a statement that cannot be solved (one line naming what is wrong), before any solve."""
+        if not self.states:
+            raise SpecError(f"{self.name}: no states; declare them with problem.state(...)")
+        missing = [v.name for v in self.states if v.name not in self.rates]
+        if missing:
+            raise SpecError(f"{self.name}: dynamics: no rate given for state(s) {', '.join(missing)}")
+        if self.tf is None and self.tf_bounds is None:
+            raise SpecError(f"{self.name}: final_time: not stated; call problem.final_time(fixed=...) or "
+                            "problem.final_time(bounds=(lower, upper))")
+        if self.objective is None:
+            raise SpecError(f"{self.name}: objective: not stated; call problem.minimize_time() or "
+                            "problem.minimize_energy()")
+        if self.objective == "time" and self.tf_bounds is None:
+            raise SpecError(f"{self.name}: minimize_time: the final time is fixed; give final_time(bounds=...)")
+        if self.objective == "energy" and self.tf is None:
+            raise SpecError(f"{self.name}: minimize_energy: needs a fixed final time (final_time(fixed=...))")
+        if self.objective == "energy" and not self.controls:
+            raise SpecError(f"{self.name}: minimize_energy: the problem has no controls")
+        known = {str(v.symbol) for v in (*self.states, *self.controls)} | {str(self.time)}
+        for label, expression in [*((f"dynamics of {k}", e) for k, e in self.rates.items()),
+                                  *((f"path_constraint {c.name!r}", c.expression) for c in self.constraints)]:
+            unknown = sorted({str(s) for s in ca.symvar(expression)} - known)
+            if unknown:
+                raise SpecError(f"{self.name}: {label}: uses {', '.join(unknown)}, which is not a state or control "
+                                "of this problem")
+
+    @property
+    def free_time(self) -> bool:
+        return self.tf_bounds is not None
+
+    def solve(self, max_iterations: int = 100, verification_points: int = 20):
+        """Transcribe, plan by SCP, check densely with SciPy; an :class:`~convexguid.ocp.result.OcpResult`."""
+        from convexguid.ocp.solve import solve_problem  # the SCP engine and SciPy load at the first solve
+
+        return solve_problem(self, max_iterations, verification_points)
+
+    def state_vector(self) -> ca.SX:
+        return ca.vertcat(*(v.symbol for v in self.states))
+
+    def control_vector(self) -> ca.SX:
+        return ca.vertcat(*(v.symbol for v in self.controls)) if self.controls else ca.SX(0, 1)
+
+    def rate_vector(self) -> ca.SX:
+        return ca.vertcat(*(self.rates[v.name] for v in self.states))
+
+    def bounds_array(self, variables: list[Variable]) -> tuple[np.ndarray, np.ndarray]:
+        low = np.array([-np.inf if v.lower is None else v.lower for v in variables])
+        high = np.array([np.inf if v.upper is None else v.upper for v in variables])
+        return low, high

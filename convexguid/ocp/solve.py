@@ -1,0 +1,63 @@
+"""Solve a user's :class:`~convexguid.ocp.problem.Problem`: the engine's check-repair loop, and a
+:class:`~convexguid.solution.Solution` like every family's (status, summary JSON, node and dense tables)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from convexguid.ocp.check import DenseChecker
+from convexguid.ocp.problem import Problem
+from convexguid.ocp.transcription import HermiteSimpsonProgram
+from convexguid.scp.check_repair import solve_verified
+from convexguid.scp.problem import ProgramSize, SCPSettings
+from convexguid.solution import Figures, Solution, Trajectory, planned_solution
+from convexguid.threads import single_threaded
+
+
+@dataclass(frozen=True)
+class _Statement:
+    """What :func:`~convexguid.solution.planned_solution` reads of a problem file, for a problem stated in Python."""
+
+    name: str
+    family: str = "ocp"
+    method: str = "scp"
+
+
+@dataclass(frozen=True)
+class OcpFigures(Figures):
+    """The summary figures of a user's problem: the final time, s."""
+
+    final_time_s: float | None = None
+
+
+def solve_problem(problem: Problem, max_iterations: int = 100, verification_points: int = 20) -> Solution:
+    """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise."""
+    started = time.perf_counter()
+    program = HermiteSimpsonProgram(problem)
+    if problem.objective == "time":
+        # weights in units of the guessed final time (the objective at the start)
+        settings = SCPSettings(max_iterations=max_iterations, penalty_unit="objective", penalty=30.0, penalty_max=3e6)
+    else:
+        # the straight-line guess often has zero control energy: absolute weights, escalated when too small
+        settings = SCPSettings(max_iterations=max_iterations)
+    with single_threaded():
+        outcome = solve_verified(program, settings, DenseChecker(verification_points))
+    final = outcome.program
+    z = outcome.x
+    size = ProgramSize(final.num_variables, final.N * final.nx + sum(v.initial is not None for v in problem.states)
+                       + sum(v.final is not None for v in problem.states), final.num_path)
+    tf = final.final_time(z)
+    nodes_t = [tf * k / final.N for k in range(final.N + 1)]
+    columns = {v.name: final.states(z)[:, i] for i, v in enumerate(problem.states)}
+    columns |= {v.name: final.node_controls(z)[:, j] for j, v in enumerate(problem.controls)}
+    dense = None
+    if outcome.check is not None:
+        track = outcome.check.track
+        dense = Trajectory(track.t, {v.name: track.x[:, i] for i, v in enumerate(problem.states)}
+                           | {v.name: track.u[:, j] for j, v in enumerate(problem.controls)})
+    return planned_solution(_Statement(problem.name), outcome, started, size,
+                            nodes=Trajectory(np.array(nodes_t), columns), dense=dense,
+                            figures=OcpFigures(final_time_s=tf))

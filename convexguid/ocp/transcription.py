@@ -1,0 +1,208 @@
+"""Hermite-Simpson transcription of a :class:`~convexguid.ocp.problem.Problem` into the SCP engine's program.
+
+Decision vector ``z = [x_0 .. x_N, u_0 .. u_N, u_{1/2} .. u_{N-1/2}, (t_f)]``: states and controls at the
+:math:`N + 1` nodes, controls at the :math:`N` interval midpoints, and the final time when it is free. On each
+interval of length :math:`h = t_f / N` (Hermite-Simpson, Betts 2010, eqs. 4.103-4.104):
+
+.. math::
+
+    x_{k+1/2} = \\tfrac12 (x_k + x_{k+1}) + \\tfrac{h}{8} (f_k - f_{k+1}),\\qquad
+    x_{k+1} - x_k - \\tfrac{h}{6} (f_k + 4 f_{k+1/2} + f_{k+1}) = 0,
+
+each defect divided by its state's scale (the feasibility tolerance is then in the state's own magnitude). Path
+constraints hold at every node and midpoint (less a ``margin`` a dense-check repair may add). Boundary values and
+bounds are the hard linear constraints :math:`Az = b`, :math:`Gz \\le h`. Minimum time is the linear cost
+:math:`t_f`; minimum energy is Simpson's rule on the squared controls, residuals
+:math:`r = u` with weights :math:`h/6 \\cdot (1, 2, \\dots, 2, 1)` at nodes and :math:`4h/6` at midpoints.
+Jacobians and the Lagrangian Hessian are CasADi's exact sparse derivatives.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from convexguid.ocp.problem import Problem
+from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+
+
+def _coo(pattern: ca.Sparsity, values: ca.DM | None = None) -> sp.coo_matrix:
+    """A CasADi sparse matrix as COO with CasADi's structural pattern (fixed across evaluations)."""
+    rows, cols = pattern.get_triplet()
+    data = np.zeros(len(rows)) if values is None else np.asarray(values.nonzeros(), dtype=float)
+    return sp.coo_matrix((data, (np.asarray(rows, dtype=int), np.asarray(cols, dtype=int))), shape=pattern.shape)
+
+
+class HermiteSimpsonProgram:
+    """The transcribed problem as a :class:`~convexguid.scp.problem.NonconvexProgram`."""
+
+    def __init__(self, problem: Problem, margin: float = 0.0) -> None:
+        problem.check()
+        self.problem, self.margin = problem, margin
+        self.N, self.nx, self.nu = problem.intervals, len(problem.states), len(problem.controls)
+        self.free_time = problem.free_time
+        self.num_variables = (self.N + 1) * (self.nx + self.nu) + self.N * self.nu + int(self.free_time)
+        self._build()
+
+    # --- layout ---------------------------------------------------------------------------------------------
+    def states(self, z: np.ndarray) -> np.ndarray:
+        """Node states, shape ``(N + 1, nx)``."""
+        return np.asarray(z[: (self.N + 1) * self.nx]).reshape(self.N + 1, self.nx)
+
+    def node_controls(self, z: np.ndarray) -> np.ndarray:
+        start = (self.N + 1) * self.nx
+        return np.asarray(z[start: start + (self.N + 1) * self.nu]).reshape(self.N + 1, self.nu)
+
+    def midpoint_controls(self, z: np.ndarray) -> np.ndarray:
+        start = (self.N + 1) * (self.nx + self.nu)
+        return np.asarray(z[start: start + self.N * self.nu]).reshape(self.N, self.nu)
+
+    def final_time(self, z: np.ndarray) -> float:
+        return float(z[-1]) if self.free_time else float(self.problem.tf)
+
+    # --- symbolic maps --------------------------------------------------------------------------------------
+    def _build(self) -> None:
+        p, N, nx, nu = self.problem, self.N, self.nx, self.nu
+        z = ca.SX.sym("z", self.num_variables)
+        X = ca.reshape(z[: (N + 1) * nx], nx, N + 1)
+        U = ca.reshape(z[(N + 1) * nx: (N + 1) * (nx + nu)], nu, N + 1)
+        M = ca.reshape(z[(N + 1) * (nx + nu): (N + 1) * (nx + nu) + N * nu], nu, N)
+        tf = z[-1] if self.free_time else p.tf
+        h = tf / N
+        x, u, t = p.state_vector(), p.control_vector(), p.time
+        f = ca.Function("f", [x, u, t], [p.rate_vector()])
+        scale = ca.DM([v.scale for v in p.states])
+        defects, constraints = [], []
+        g = ca.Function("g", [x, u, t], [ca.vertcat(*(c.expression for c in p.constraints))]) if p.constraints else None
+        for k in range(N):
+            tk = k * h
+            fk, fk1 = f(X[:, k], U[:, k], tk), f(X[:, k + 1], U[:, k + 1], tk + h)
+            xm = 0.5 * (X[:, k] + X[:, k + 1]) + h / 8 * (fk - fk1)
+            fm = f(xm, M[:, k], tk + h / 2)
+            defects.append((X[:, k + 1] - X[:, k] - h / 6 * (fk + 4 * fm + fk1)) / scale)
+            if g is not None:
+                constraints += [g(X[:, k], U[:, k], tk), g(xm, M[:, k], tk + h / 2)]
+        if g is not None:
+            constraints.append(g(X[:, N], U[:, N], tf))
+        defect = ca.vertcat(*defects)
+        path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
+        self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
+        self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
+        self._defect_pattern = ca.jacobian(defect, z).sparsity()
+        self._path_pattern = ca.jacobian(path, z).sparsity()
+        lam, mu = ca.SX.sym("lam", defect.shape[0]), ca.SX.sym("mu", path.shape[0])
+        lagrangian = ca.dot(lam, defect) + (ca.dot(mu, path) if path.shape[0] else 0)
+        self._hessian = ca.Function("hessian", [z, lam, mu], [ca.hessian(lagrangian, z)[0]])
+        self.num_path = path.shape[0]
+
+    # --- NonconvexProgram -----------------------------------------------------------------------------------
+    def initial_guess(self) -> np.ndarray:
+        """States straight from their initial to their final values (the other given one where only one is),
+        controls at their guess (else the middle of finite bounds, else 0), the final time at its guess."""
+        p, N = self.problem, self.N
+        s = np.linspace(0.0, 1.0, N + 1)[:, None]
+        start = np.array([v.initial if v.initial is not None else (v.final or 0.0) for v in p.states])
+        end = np.array([v.final if v.final is not None else start[i] for i, v in enumerate(p.states)])
+        states = start + s * (end - start)
+        control = np.array([_control_guess(v) for v in p.controls])
+        parts = [states.ravel(), np.tile(control, N + 1), np.tile(control, N)]
+        if self.free_time:
+            parts.append([p.tf_guess])
+        return np.concatenate(parts)
+
+    def variable_scale(self) -> np.ndarray:
+        p, N = self.problem, self.N
+        states = np.array([v.scale for v in p.states])
+        controls = np.array([v.scale for v in p.controls])
+        parts = [np.tile(states, N + 1), np.tile(controls, 2 * N + 1)]
+        if self.free_time:
+            parts.append([max(self.problem.tf_guess, 1e-6)])
+        return np.concatenate(parts)
+
+    @cached_property
+    def _energy_rows(self) -> tuple[sp.csr_matrix, np.ndarray]:
+        """Residual selection (every node and midpoint control) and Simpson's weights for them."""
+        N, nu = self.N, self.nu
+        h = (self.problem.tf or 0.0) / N
+        first = (N + 1) * self.nx
+        columns = np.arange(first, first + (2 * N + 1) * nu)
+        select = sp.csr_matrix((np.ones(columns.size), (np.arange(columns.size), columns)),
+                               shape=(columns.size, self.num_variables))
+        node_weight = np.full(N + 1, 2 * h / 6)
+        node_weight[[0, -1]] = h / 6
+        weights = np.concatenate([np.repeat(node_weight, nu), np.full(N * nu, 4 * h / 6)])
+        return select, weights
+
+    def residual_weights(self) -> np.ndarray:
+        return self._energy_rows[1] if self.problem.objective == "energy" else np.zeros(0)
+
+    def linear_cost(self) -> np.ndarray:
+        cost = np.zeros(self.num_variables)
+        if self.problem.objective == "time":
+            cost[-1] = 1.0
+        return cost
+
+    def linear_constraints(self) -> LinearConstraints:
+        p, N, nx, n = self.problem, self.N, self.nx, self.num_variables
+        rows, values = [], []
+        for i, v in enumerate(p.states):
+            for node, value in ((0, v.initial), (N, v.final)):
+                if value is not None:
+                    rows.append(node * nx + i)
+                    values.append(value)
+        A = sp.coo_matrix((np.ones(len(rows)), (np.arange(len(rows)), rows)), shape=(len(rows), n))
+        low, high = self._bounds()
+        upper, lower = np.flatnonzero(np.isfinite(high)), np.flatnonzero(np.isfinite(low))
+        G = sp.vstack([sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
+                       sp.coo_matrix((-np.ones(lower.size), (np.arange(lower.size), lower)), shape=(lower.size, n))])
+        h = np.concatenate([high[upper], -low[lower]])
+        return LinearConstraints(A, np.array(values, dtype=float), G.tocoo(), h)
+
+    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        p, N = self.problem, self.N
+        xl, xh = p.bounds_array(p.states)
+        ul, uh = p.bounds_array(p.controls)
+        low = [np.tile(xl, N + 1), np.tile(ul, 2 * N + 1)]
+        high = [np.tile(xh, N + 1), np.tile(uh, 2 * N + 1)]
+        if self.free_time:
+            low.append([p.tf_bounds[0]])
+            high.append([p.tf_bounds[1]])
+        return np.concatenate(low), np.concatenate(high)
+
+    def output_constraints(self) -> OutputConstraints:
+        return OutputConstraints.none(self.residual_weights().size)
+
+    def evaluate(self, z: np.ndarray, jacobians: bool = True) -> Evaluation:
+        defect, defect_jac = self._defects(z)
+        path, path_jac = self._path(z)
+        residuals = np.zeros(0)
+        residual_jacobian = sp.coo_matrix((0, self.num_variables)) if jacobians else None
+        if self.problem.objective == "energy":
+            select = self._energy_rows[0]
+            residuals = select @ z
+            residual_jacobian = select.tocoo() if jacobians else None
+        equalities = (ConstraintBlock("dynamics_defects", np.asarray(defect, dtype=float).ravel(),
+                                      _coo(self._defect_pattern, defect_jac) if jacobians else None, "scaled state"),)
+        inequalities = ()
+        if self.num_path:
+            inequalities = (ConstraintBlock("path_constraints", np.asarray(path, dtype=float).ravel() + self.margin,
+                                            _coo(self._path_pattern, path_jac) if jacobians else None),)
+        return Evaluation(residuals, residual_jacobian, inequalities, equalities)
+
+    def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
+        """CasADi's exact :math:`\\sum \\lambda_k \\nabla^2 e_k + \\sum \\mu_j \\nabla^2 g_j` (the energy residuals are
+        linear in ``z``: no curvature of their own)."""
+        mu = weights.inequality if self.num_path else np.zeros(0)
+        hessian = self._hessian(z, weights.equality, mu)
+        return _coo(hessian.sparsity(), hessian).tocsr()
+
+
+def _control_guess(v) -> float:
+    if v.guess is not None:
+        return v.guess
+    if v.lower is not None and v.upper is not None:
+        return 0.5 * (v.lower + v.upper)
+    return 0.0

@@ -1,0 +1,157 @@
+"""A guidance problem stated in Python (issue 22, first part): convexguid.ocp on published and closed-form answers.
+
+* The brachistochrone (examples/brachistochrone.py) against Bernoulli's cycloid, and the same time when gravity
+  moves by 1e-12.
+* A rest-to-rest double integrator at minimum energy: the closed form u = 6 - 12 t, J = 12.
+* A keep-out circle (a nonconvex path constraint) at minimum energy: verified between the nodes, and the same
+  optimum as IPOPT on the same Hermite-Simpson NLP from the same start.
+* A problem stated wrongly: one line naming what is wrong, before any solve.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from convexguid.errors import SpecError
+from convexguid.ocp import Problem
+from convexguid.ocp.transcription import HermiteSimpsonProgram
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _example(name: str):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "examples" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def cycloid_time(x: float, y: float, g: float) -> float:
+    """Time along the cycloid from rest at the origin to (x, -y): x = r(phi - sin phi), y = r(1 - cos phi)."""
+    phi = brentq(lambda p: (p - math.sin(p)) / (1 - math.cos(p)) - x / y, 1e-6, 2 * math.pi - 1e-3)
+    r = y / (1 - math.cos(phi))
+    return phi * math.sqrt(r / g)
+
+
+def test_the_brachistochrone_is_the_cycloid():
+    brachistochrone = _example("brachistochrone")
+    solution = brachistochrone.build().solve()
+    assert solution.status == "converged", solution.message
+    assert solution.verification.passed
+    exact = cycloid_time(2.0, 2.0, brachistochrone.G)
+    assert solution.figures.final_time_s == pytest.approx(exact, rel=1e-5)
+    assert solution.summary()["final_time_s"] == solution.figures.final_time_s
+
+
+def test_the_brachistochrone_does_not_hang_on_round_off(monkeypatch):
+    brachistochrone = _example("brachistochrone")
+    times = []
+    for g in (brachistochrone.G, brachistochrone.G * (1 + 1e-12), brachistochrone.G * (1 - 1e-12)):
+        monkeypatch.setattr(brachistochrone, "G", g)
+        solution = brachistochrone.build().solve()
+        assert solution.ok, solution.message
+        times.append(solution.figures.final_time_s)
+    assert max(times) - min(times) <= 1e-9 * times[0]
+
+
+def _double_integrator() -> Problem:
+    p = Problem("double-integrator")
+    x = p.state("x", initial=0.0, final=1.0)
+    v = p.state("v", initial=0.0, final=0.0)
+    u = p.control("u")
+    p.dynamics({x: v, v: u})
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(10)
+    return p
+
+
+def test_minimum_energy_rest_to_rest_is_the_closed_form():
+    solution = _double_integrator().solve()
+    assert solution.ok, solution.message
+    assert solution.objective == pytest.approx(12.0, rel=1e-8)  # J = integral of (6 - 12 t)^2 over [0, 1]
+    t = solution.nodes.t
+    assert np.allclose(solution.nodes.columns["u"], 6 - 12 * t, atol=1e-6)
+
+
+def _keep_out() -> Problem:
+    p = Problem("keep-out")
+    px = p.state("px", initial=0.0, final=10.0)
+    py = p.state("py", initial=0.0, final=0.0, scale=10.0)
+    vx = p.state("vx", initial=0.0, final=0.0)
+    vy = p.state("vy", initial=0.0, final=0.0)
+    ax = p.control("ax", bounds=(-5.0, 5.0))
+    ay = p.control("ay", bounds=(-5.0, 5.0))
+    p.dynamics({px: vx, py: vy, vx: ax, vy: ay})
+    p.path_constraint("keep_out", 2.0**2 - (px - 5.0) ** 2 - (py - 0.3) ** 2, "m^2")
+    p.final_time(fixed=5.0)
+    p.minimize_energy()
+    p.transcription(30)
+    return p
+
+
+def _ipopt_optimum(problem: Problem) -> float:
+    """IPOPT (exact Hessian) on the same Hermite-Simpson NLP from the same straight-line start."""
+    program = HermiteSimpsonProgram(problem)
+    z = ca.SX.sym("z", program.num_variables)
+    select, weights = program._energy_rows
+    selected = ca.DM(select.toarray()) @ z
+    objective = ca.dot(ca.DM(weights), selected**2)
+    defects, _ = program._defects(z)
+    path, _ = program._path(z)
+    lin = program.linear_constraints()
+    constraints = ca.vertcat(defects, path, ca.DM(lin.A.toarray()) @ z - lin.b, ca.DM(lin.G.toarray()) @ z - lin.h)
+    n_eq = defects.shape[0]
+    n_path, n_a, n_g = path.shape[0], lin.A.shape[0], lin.G.shape[0]
+    lbg = np.concatenate([np.zeros(n_eq), -np.inf * np.ones(n_path), np.zeros(n_a), -np.inf * np.ones(n_g)])
+    ubg = np.concatenate([np.zeros(n_eq), np.zeros(n_path), np.zeros(n_a), np.zeros(n_g)])
+    solver = ca.nlpsol("ipopt", "ipopt", {"x": z, "f": objective, "g": constraints},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-10})
+    result = solver(x0=program.initial_guess(), lbg=lbg, ubg=ubg)
+    assert solver.stats()["success"]
+    return float(result["f"])
+
+
+def test_a_keep_out_circle_is_respected_between_the_nodes_and_the_optimum_is_ipopts():
+    problem = _keep_out()
+    solution = problem.solve()
+    assert solution.ok, solution.message
+    keep_out = next(c for c in solution.verification.checks if c.name == "keep_out")
+    assert keep_out.worst <= 1e-6  # on the dense SciPy re-propagation, not only at the nodes
+    radius = np.hypot(solution.dense.columns["px"] - 5.0, solution.dense.columns["py"] - 0.3)
+    assert radius.min() >= 2.0 - 1e-6
+    assert solution.objective == pytest.approx(_ipopt_optimum(_keep_out()), rel=1e-6)
+
+
+@pytest.mark.parametrize(("statement", "message"), [
+    (lambda p: (p.state("x"), p.state("x")), r"^demo: state 'x': the name is already taken"),
+    (lambda p: p.state("x", bounds=(0.0, 1.0), initial=2.0), r"^demo: state 'x': initial value 2 is outside"),
+    (lambda p: p.dynamics({ca.SX.sym("w"): 1.0}), r"^demo: dynamics: w is not a state of this problem"),
+    (lambda p: p.final_time(bounds=(2.0, 1.0)), r"^demo: final_time: bounds: expected 0 < lower < upper"),
+    (lambda p: p.path_constraint("c", ca.SX.sym("a", 2)), r"^demo: path_constraint 'c': expected a scalar"),
+    (lambda p: p.transcription(1), r"^demo: transcription: intervals: expected an integer >= 2"),
+])
+def test_a_wrong_statement_is_one_line_naming_it(statement, message):
+    with pytest.raises(SpecError, match=message) as error:
+        statement(Problem("demo"))
+    assert "\n" not in str(error.value)
+
+
+def test_an_incomplete_problem_is_refused_before_the_solve():
+    p = Problem("demo")
+    x = p.state("x", initial=0.0, final=1.0)
+    p.state("v", initial=0.0)
+    p.dynamics({x: 1.0})
+    with pytest.raises(SpecError, match=r"^demo: dynamics: no rate given for state\(s\) v$"):
+        p.solve()
+    q = _double_integrator()
+    q.path_constraint("uses_unknown", ca.SX.sym("w") - 1.0)
+    with pytest.raises(SpecError, match=r"^double-integrator: path_constraint 'uses_unknown': uses w"):
+        q.solve()
