@@ -5,16 +5,19 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from convexguid.ocp.check import DenseChecker
-from convexguid.ocp.problem import Problem
 from convexguid.ocp.transcription import HermiteSimpsonProgram
 from convexguid.scp.check_repair import solve_verified
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.solution import Figures, Solution, Trajectory, planned_solution
 from convexguid.threads import single_threaded
+
+if TYPE_CHECKING:  # the problem module imports this one when it solves
+    from convexguid.ocp.problem import Problem
 
 
 @dataclass(frozen=True)

@@ -20,13 +20,16 @@ Jacobians and the Lagrangian Hessian are CasADi's exact sparse derivatives.
 from __future__ import annotations
 
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.ocp.problem import Problem
 from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+
+if TYPE_CHECKING:  # the problem module imports this one when it solves
+    from convexguid.ocp.problem import Problem
 
 
 def _coo(pattern: ca.Sparsity, values: ca.DM | None = None) -> sp.coo_matrix:
