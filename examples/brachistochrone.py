@@ -13,12 +13,11 @@ G = 9.81
 
 def build(intervals: int = 30) -> Problem:
     p = Problem("brachistochrone")
-    p.state("x", initial=0.0, final=2.0)
-    p.state("y", initial=0.0, final=-2.0)
-    v = p.state("v", bounds=(0.0, None), initial=0.0, scale=6.0)
-    theta = p.control("theta", bounds=(0.0, 3.14159), guess=1.0)
-    x_dot, y_dot, v_dot = v * ca.sin(theta), -v * ca.cos(theta), G * ca.cos(theta)
-    p.dynamics({p.states[0].symbol: x_dot, p.states[1].symbol: y_dot, v: v_dot})
+    x = p.state("x", initial=0.0, final=2.0)  # m
+    y = p.state("y", initial=0.0, final=-2.0)  # m
+    v = p.state("v", bounds=(0.0, None), initial=0.0, scale=6.0)  # m/s
+    theta = p.control("theta", bounds=(0.0, 3.14159), guess=1.0)  # rad from the downward vertical
+    p.dynamics({x: v * ca.sin(theta), y: -v * ca.cos(theta), v: G * ca.cos(theta)})
     p.final_time(bounds=(0.1, 5.0), guess=1.0)
     p.minimize_time()
     p.transcription(intervals)
