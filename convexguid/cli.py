@@ -110,6 +110,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 def _write_outputs(sol: Solution, args: argparse.Namespace) -> list[str]:
     """Write ``--out`` (a staged folder swapped in whole) and ``--summary-json``; one reason per failed output."""
+    from convexguid.ocp.plots import plot_ocp
     from convexguid.solution_plots import plot_solution
 
     failed = []
@@ -121,7 +122,10 @@ def _write_outputs(sol: Solution, args: argparse.Namespace) -> list[str]:
                 if sol.nodes is not None:
                     sol.nodes.write_csv(folder / "nodes.csv")
                 sol.write_summary(folder / "summary.json")
-                plot_solution(sol, folder)
+                if sol.family == "ocp":  # a problem stated in Python: its states and controls
+                    plot_ocp(sol, folder)
+                else:
+                    plot_solution(sol, folder)
         except OSError as exc:
             failed.append(str(exc) if isinstance(exc, OutputError) else f"--out {args.out}: {describe(exc)}")
     if args.summary_json is not None:
@@ -149,12 +153,26 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from convexguid.api import check_runnable, solve
     from convexguid.problem_files import load_problem
 
+    if args.problem.suffix == ".py":
+        return _solve_module(args)
     spec = load_problem(args.problem, args.overrides)
     check_runnable(spec)
     _check_outputs(args)
     if not args.quiet:
         _print_header()
     sol = run(lambda: solve(spec, log=None if args.quiet else _print_row), f"solve {spec.name}")
+    return _finish(sol, args)
+
+
+def _solve_module(args: argparse.Namespace) -> int:
+    """``convexguid solve my_problem.py``: a problem stated in Python (:mod:`convexguid.ocp.module`)."""
+    from convexguid.ocp.module import load_module_problem
+
+    problem = load_module_problem(args.problem, args.overrides)
+    _check_outputs(args)
+    if not args.quiet:
+        _print_header()
+    sol = run(lambda: problem.solve(log=None if args.quiet else _print_row), f"solve {problem.name}")
     return _finish(sol, args)
 
 

@@ -16,7 +16,7 @@ def build(intervals: int = 30) -> Problem:
     x = p.state("x", initial=0.0, final=2.0)  # m
     y = p.state("y", initial=0.0, final=-2.0)  # m
     v = p.state("v", bounds=(0.0, None), initial=0.0, scale=6.0)  # m/s
-    theta = p.control("theta", bounds=(0.0, 3.14159), guess=1.0)  # rad from the downward vertical
+    theta = p.control("theta", bounds=(-1.5708, 3.1416), guess=1.0)  # rad from the downward vertical
     p.dynamics({x: v * ca.sin(theta), y: -v * ca.cos(theta), v: G * ca.cos(theta)})
     p.final_time(bounds=(0.1, 5.0), guess=1.0)
     p.minimize_time()

@@ -11,7 +11,9 @@
 from __future__ import annotations
 
 import importlib.util
+import json
 import math
+import re
 from pathlib import Path
 
 import casadi as ca
@@ -48,6 +50,14 @@ def test_the_brachistochrone_is_the_cycloid():
     exact = cycloid_time(2.0, 2.0, brachistochrone.G)
     assert solution.figures.final_time_s == pytest.approx(exact, rel=1e-5)
     assert solution.summary()["final_time_s"] == solution.figures.final_time_s
+
+
+@pytest.mark.parametrize("intervals", [10, 20, 60])
+def test_the_brachistochrone_converges_on_other_grids(intervals):
+    brachistochrone = _example("brachistochrone")
+    solution = brachistochrone.build(intervals).solve()
+    assert solution.ok and solution.kkt["met"], solution.message
+    assert solution.figures.final_time_s == pytest.approx(cycloid_time(2.0, 2.0, brachistochrone.G), rel=1e-4)
 
 
 def test_the_brachistochrone_does_not_hang_on_round_off(monkeypatch):
@@ -155,3 +165,41 @@ def test_an_incomplete_problem_is_refused_before_the_solve():
     q.path_constraint("uses_unknown", ca.SX.sym("w") - 1.0)
     with pytest.raises(SpecError, match=r"^double-integrator: path_constraint 'uses_unknown': uses w"):
         q.solve()
+
+
+# --- the command line -------------------------------------------------------------------------------------------
+
+
+def test_convexguid_solve_runs_a_problem_module(tmp_path, capsys):
+    from convexguid.cli import main
+
+    out = tmp_path / "out"
+    assert main(["solve", str(ROOT / "examples" / "brachistochrone.py"), "--quiet", "--out", str(out),
+                 "--set", "intervals=20"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["controls.png", "nodes.csv", "states.png", "summary.json",
+                                                     "trajectory.csv"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["family"] == "ocp" and summary["status"] == "converged" and summary["verification"]["passed"]
+    assert summary["final_time_s"] == pytest.approx(cycloid_time(2.0, 2.0, 9.81), rel=1e-4)  # 20 intervals
+
+
+@pytest.mark.parametrize(("module", "overrides", "message"), [
+    ("brachistochrone.py", ["g=3"], r"--set 'g=3': not a parameter of build\(\); its parameters: intervals"),
+    ("missing.py", [], r"missing.py: file not found"),
+])
+def test_a_bad_problem_module_is_exit_2_with_one_line(module, overrides, message, capsys):
+    from convexguid.cli import main
+
+    args = ["solve", str(ROOT / "examples" / module), "--quiet"] + [a for o in overrides for a in ("--set", o)]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert re.search(message, err) and err.count("\n") == 1
+
+
+def test_a_module_whose_build_returns_something_else_is_refused(tmp_path, capsys):
+    from convexguid.cli import main
+
+    module = tmp_path / "wrong.py"
+    module.write_text("def build():\n    return 42\n")
+    assert main(["solve", str(module), "--quiet"]) == 2
+    assert "build() returned int; it must return a convexguid.ocp.Problem" in capsys.readouterr().err

@@ -2,7 +2,7 @@
 
 A :class:`Problem` collects CasADi symbols and what the user says of them; :meth:`Problem.solve` transcribes it
 (Hermite-Simpson, :mod:`convexguid.ocp.transcription`), hands it to the SCP engine with the dense SciPy check
-(:mod:`convexguid.ocp.check`) and returns an :class:`~convexguid.ocp.result.OcpResult`.
+(:mod:`convexguid.ocp.check`) and returns a :class:`~convexguid.solution.Solution` like every family's.
 
 What stays exact in every subproblem: bounds on states, controls and the final time, and boundary values.
 What the engine linearizes, inside its trust region and exact penalty: the dynamics defects and the path
@@ -198,11 +198,12 @@ class Problem:
     def free_time(self) -> bool:
         return self.tf_bounds is not None
 
-    def solve(self, max_iterations: int = 100, verification_points: int = 20):
-        """Transcribe, plan by SCP, check densely with SciPy; an :class:`~convexguid.ocp.result.OcpResult`."""
+    def solve(self, max_iterations: int = 100, verification_points: int = 20, log=None):
+        """Transcribe, plan by SCP, check densely with SciPy: a :class:`~convexguid.solution.Solution` (``log``: a
+        function given each SCP iteration's record)."""
         from convexguid.ocp.solve import solve_problem  # the SCP engine and SciPy load at the first solve
 
-        return solve_problem(self, max_iterations, verification_points)
+        return solve_problem(self, max_iterations, verification_points, log)
 
     def state_vector(self) -> ca.SX:
         return ca.vertcat(*(v.symbol for v in self.states))

@@ -12,6 +12,7 @@ import numpy as np
 from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.transcription import HermiteSimpsonProgram
 from convexguid.scp.check_repair import solve_verified
+from convexguid.scp.engine import Log
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.solution import Figures, Solution, Trajectory, planned_solution
 from convexguid.threads import single_threaded
@@ -31,13 +32,17 @@ class _Statement:
 
 @dataclass(frozen=True)
 class OcpFigures(Figures):
-    """The summary figures of a user's problem: the final time, s."""
+    """The summary figures of a user's problem: the final time (s) and the names of its states and controls."""
 
     final_time_s: float | None = None
+    states: tuple[str, ...] = ()
+    controls: tuple[str, ...] = ()
 
 
-def solve_problem(problem: Problem, max_iterations: int = 100, verification_points: int = 20) -> Solution:
-    """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise."""
+def solve_problem(problem: Problem, max_iterations: int = 100, verification_points: int = 20,
+                  log: Log | None = None) -> Solution:
+    """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise (``log`` gets one
+    record per SCP iteration)."""
     started = time.perf_counter()
     program = HermiteSimpsonProgram(problem)
     if problem.objective == "time":
@@ -47,7 +52,7 @@ def solve_problem(problem: Problem, max_iterations: int = 100, verification_poin
         # the straight-line guess often has zero control energy: absolute weights, escalated when too small
         settings = SCPSettings(max_iterations=max_iterations)
     with single_threaded():
-        outcome = solve_verified(program, settings, DenseChecker(verification_points))
+        outcome = solve_verified(program, settings, DenseChecker(verification_points), log)
     final = outcome.program
     z = outcome.x
     size = ProgramSize(final.num_variables, final.N * final.nx + sum(v.initial is not None for v in problem.states)
@@ -63,4 +68,5 @@ def solve_problem(problem: Problem, max_iterations: int = 100, verification_poin
                            | {v.name: track.u[:, j] for j, v in enumerate(problem.controls)})
     return planned_solution(_Statement(problem.name), outcome, started, size,
                             nodes=Trajectory(np.array(nodes_t), columns), dense=dense,
-                            figures=OcpFigures(final_time_s=tf))
+                            figures=OcpFigures(final_time_s=tf, states=tuple(v.name for v in problem.states),
+                                               controls=tuple(v.name for v in problem.controls)))

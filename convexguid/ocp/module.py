@@ -1,0 +1,59 @@
+"""A problem module: a Python file whose ``build(...)`` returns a :class:`~convexguid.ocp.problem.Problem`.
+
+``convexguid solve my_problem.py --set name=value`` runs it: each ``--set`` sets one parameter of ``build`` (the
+value read as YAML, as for problem files); a name ``build`` does not declare, a module without ``build`` or a
+``build`` that raises or returns something else is one line naming the file (exit 2).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import inspect
+from collections.abc import Sequence
+from pathlib import Path
+
+import yaml
+
+from convexguid.errors import SpecError
+from convexguid.ocp.problem import Problem
+
+
+def load_module_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem:
+    """The problem ``build(**parameters)`` of the module at ``path`` returns, ``overrides`` setting parameters."""
+    path = Path(path)
+    if not path.is_file():
+        raise SpecError(f"{path}: file not found; give the path of a problem module (a .py file with build())")
+    spec = importlib.util.spec_from_file_location(f"convexguid_problem_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except SpecError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - the user's module: one line, not a traceback
+        raise SpecError(f"{path}: the module raised {type(exc).__name__} when loaded: {exc}") from None
+    build = getattr(module, "build", None)
+    if not callable(build):
+        raise SpecError(f"{path}: no build() function; a problem module defines build(...) returning a "
+                        "convexguid.ocp.Problem")
+    parameters = inspect.signature(build).parameters
+    values = {}
+    for override in overrides:
+        name, sep, raw = override.partition("=")
+        name = name.strip()
+        if not sep or name not in parameters:
+            known = ", ".join(parameters) or "none"
+            raise SpecError(f"{path}: --set {override!r}: not a parameter of build(); its parameters: {known}")
+        try:
+            values[name] = yaml.safe_load(raw)
+        except yaml.YAMLError:
+            raise SpecError(f"{path}: --set {name}: the value is not YAML (got {raw!r})") from None
+    try:
+        problem = build(**values)
+    except SpecError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - the user's module: one line, not a traceback
+        raise SpecError(f"{path}: build() raised {type(exc).__name__}: {exc}") from None
+    if not isinstance(problem, Problem):
+        raise SpecError(f"{path}: build() returned {type(problem).__name__}; it must return a convexguid.ocp.Problem")
+    problem.check()
+    return problem
