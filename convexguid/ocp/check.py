@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from convexguid.ocp.transcription import HermiteSimpsonProgram
+from convexguid.ocp.transcription import HermiteSimpsonProgram, Margins
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
 
@@ -100,12 +100,55 @@ class DenseChecker:
         return Check(verification, track)
 
     def repair(self, program: HermiteSimpsonProgram, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
-        """Tighten the path constraints at the nodes by the worst excess between them (grown each round); a
-        final-state error (the transcription's) has no repair here: refine ``transcription(intervals=...)``."""
-        excess = max((c.violation for c in check.verification.checks if c.sense == "max"
-                      and not c.name.endswith("_max")), default=0.0)
-        if excess <= PATH_TOLERANCE:
+        """Tighten each path constraint and state bound broken between nodes on the intervals where it broke: at
+        their two nodes and midpoint, by the worst excess there (grown each round, never at a node whose values
+        are all fixed: there nothing can move). A final-state error is the transcription's, not repaired here:
+        more intervals (``transcription(intervals=...)``) reduce it."""
+        if all(c.violation <= PATH_TOLERANCE for c in check.verification.checks):
             return None
-        margin = program.margin + grown_margin(excess, attempt, MARGIN_FLOOR)
-        return Repair(HermiteSimpsonProgram(program.problem, margin), z,
-                      f"path constraints tightened by {margin:.3g} at the nodes")
+        p, track, N = program.problem, check.track, program.N
+        h = program.final_time(z) / N
+        interval = np.minimum((track.t // h).astype(int), N - 1)
+        path, bounds = program.margins.path.copy(), program.margins.bounds.copy()
+        nc, nx = len(p.constraints), program.nx
+        pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
+        excess_by_name = self._excess(program, track)
+        for name, excess in excess_by_name.items():
+            for k in np.unique(interval[excess > PATH_TOLERANCE]):
+                worst = float(excess[interval == k].max())
+                margin = grown_margin(worst, attempt, MARGIN_FLOOR)
+                kind, index = name
+                if kind == "path":
+                    rows = [2 * k * nc + index, (2 * k + 1) * nc + index] + ([] if pinned.get(k + 1) else
+                                                                            [2 * (k + 1) * nc + index])
+                    rows = [r for r in rows if not (pinned.get(k) and r == 2 * k * nc + index)]
+                    path[rows] += margin
+                else:
+                    state, upper = index
+                    fixed = {0: p.states[state].initial is not None, N: p.states[state].final is not None}
+                    nodes = [node for node in (k, k + 1) if not fixed.get(node)]
+                    bounds[[node * nx + state for node in nodes]] += margin
+        if np.array_equal(path, program.margins.path) and np.array_equal(bounds, program.margins.bounds):
+            return None
+        return Repair(HermiteSimpsonProgram(p, Margins(path, bounds)), z,
+                      f"path constraints and state bounds tightened where the dense check broke them (largest "
+                      f"margin {max(path.max(initial=0.0), bounds.max(initial=0.0)):.3g})")
+
+    @staticmethod
+    def _excess(program: HermiteSimpsonProgram, track: DenseTrack) -> dict[tuple, np.ndarray]:
+        """Each path constraint's and state bound's excess on the dense grid, by ``("path", j)`` or
+        ``("bound", (state, is_upper))``."""
+        p = program.problem
+        out: dict[tuple, np.ndarray] = {}
+        if p.constraints:
+            g = ca.Function("g", [p.state_vector(), p.control_vector(), p.time],
+                            [ca.vertcat(*(c.expression for c in p.constraints))])
+            values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
+                                                                                 strict=True)])
+            out |= {("path", j): values[:, j] for j in range(len(p.constraints))}
+        for i, v in enumerate(p.states):
+            if v.upper is not None:
+                out[("bound", (i, True))] = track.x[:, i] - v.upper
+            if v.lower is not None:
+                out[("bound", (i, False))] = v.lower - track.x[:, i]
+        return out

@@ -160,6 +160,11 @@ class Problem:
         """Minimise the integral of the sum of the squared controls (a fixed final time)."""
         self.objective = "energy"
 
+    def minimize_fuel(self) -> None:
+        """Minimise the integral of the sum of the controls' absolute values (one thruster pair per axis); the
+        final time may be fixed or free."""
+        self.objective = "fuel"
+
     def transcription(self, intervals: int) -> None:
         """Hermite-Simpson on ``intervals`` equal intervals."""
         if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < 2:
@@ -178,14 +183,14 @@ class Problem:
             raise SpecError(f"{self.name}: final_time: not stated; call problem.final_time(fixed=...) or "
                             "problem.final_time(bounds=(lower, upper))")
         if self.objective is None:
-            raise SpecError(f"{self.name}: objective: not stated; call problem.minimize_time() or "
-                            "problem.minimize_energy()")
+            raise SpecError(f"{self.name}: objective: not stated; call problem.minimize_time(), "
+                            "problem.minimize_energy() or problem.minimize_fuel()")
         if self.objective == "time" and self.tf_bounds is None:
             raise SpecError(f"{self.name}: minimize_time: the final time is fixed; give final_time(bounds=...)")
         if self.objective == "energy" and self.tf is None:
             raise SpecError(f"{self.name}: minimize_energy: needs a fixed final time (final_time(fixed=...))")
-        if self.objective == "energy" and not self.controls:
-            raise SpecError(f"{self.name}: minimize_energy: the problem has no controls")
+        if self.objective in ("energy", "fuel") and not self.controls:
+            raise SpecError(f"{self.name}: minimize_{self.objective}: the problem has no controls")
         known = {str(v.symbol) for v in (*self.states, *self.controls)} | {str(self.time)}
         for label, expression in [*((f"dynamics of {k}", e) for k, e in self.rates.items()),
                                   *((f"path_constraint {c.name!r}", c.expression) for c in self.constraints)]:

@@ -1,7 +1,9 @@
 """Hermite-Simpson transcription of a :class:`~convexguid.ocp.problem.Problem` into the SCP engine's program.
 
-Decision vector ``z = [x_0 .. x_N, u_0 .. u_N, u_{1/2} .. u_{N-1/2}, (t_f)]``: states and controls at the
-:math:`N + 1` nodes, controls at the :math:`N` interval midpoints, and the final time when it is free. On each
+Decision vector ``z = [x_0 .. x_N, u_0 .. u_N, u_{1/2} .. u_{N-1/2}, (s), (J), (t_f)]``: states and controls at
+the :math:`N + 1` nodes, controls at the :math:`N` interval midpoints, for minimum fuel the slacks
+:math:`s \\ge |u|` of every control value (and with a free final time the fuel's epigraph variable :math:`J`), and
+the final time when it is free. On each
 interval of length :math:`h = t_f / N` (Hermite-Simpson, Betts 2010, eqs. 4.103-4.104):
 
 .. math::
@@ -10,15 +12,20 @@ interval of length :math:`h = t_f / N` (Hermite-Simpson, Betts 2010, eqs. 4.103-
     x_{k+1} - x_k - \\tfrac{h}{6} (f_k + 4 f_{k+1/2} + f_{k+1}) = 0,
 
 each defect divided by its state's scale (the feasibility tolerance is then in the state's own magnitude). Path
-constraints hold at every node and midpoint (less a ``margin`` a dense-check repair may add). Boundary values and
-bounds are the hard linear constraints :math:`Az = b`, :math:`Gz \\le h`. Minimum time is the linear cost
+constraints hold at every node and midpoint, and state bounds at every node, each less the margin a dense-check
+repair may have added there (:class:`Margins`). Boundary values and bounds are the hard linear constraints
+:math:`Az = b`, :math:`Gz \\le h`. Minimum time is the linear cost
 :math:`t_f`; minimum energy is Simpson's rule on the squared controls, residuals
-:math:`r = u` with weights :math:`h/6 \\cdot (1, 2, \\dots, 2, 1)` at nodes and :math:`4h/6` at midpoints.
+:math:`r = u` with weights :math:`h/6 \\cdot (1, 2, \\dots, 2, 1)` at nodes and :math:`4h/6` at midpoints; minimum
+fuel :math:`\\int \\sum_i |u_i|\\,dt` is the same rule on the slacks, :math:`-s \\le u \\le s` linear: a linear cost
+when the final time is fixed, else :math:`\\min J` subject to :math:`h \\sum_j w_j s_j - J \\le 0` (an epigraph the
+engine linearizes like any constraint).
 Jacobians and the Lagrangian Hessian are CasADi's exact sparse derivatives.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -39,16 +46,34 @@ def _coo(pattern: ca.Sparsity, values: ca.DM | None = None) -> sp.coo_matrix:
     return sp.coo_matrix((data, (np.asarray(rows, dtype=int), np.asarray(cols, dtype=int))), shape=pattern.shape)
 
 
+@dataclass(frozen=True)
+class Margins:
+    """How much tighter than stated a repair made each path-constraint row (nodes and midpoints, in the order of the
+    path vector) and each node state bound (the states' part of ``z``)."""
+
+    path: np.ndarray
+    bounds: np.ndarray
+
+    @classmethod
+    def none(cls, path_rows: int, state_values: int) -> Margins:
+        return cls(np.zeros(path_rows), np.zeros(state_values))
+
+
 class HermiteSimpsonProgram:
     """The transcribed problem as a :class:`~convexguid.scp.problem.NonconvexProgram`."""
 
-    def __init__(self, problem: Problem, margin: float = 0.0) -> None:
+    def __init__(self, problem: Problem, margins: Margins | None = None) -> None:
         problem.check()
-        self.problem, self.margin = problem, margin
+        self.problem = problem
         self.N, self.nx, self.nu = problem.intervals, len(problem.states), len(problem.controls)
         self.free_time = problem.free_time
-        self.num_variables = (self.N + 1) * (self.nx + self.nu) + self.N * self.nu + int(self.free_time)
+        self.fuel = problem.objective == "fuel"
+        self.slack_start = (self.N + 1) * (self.nx + self.nu) + self.N * self.nu
+        self.num_slacks = (2 * self.N + 1) * self.nu if self.fuel else 0
+        self.epigraph = self.fuel and self.free_time
+        self.num_variables = self.slack_start + self.num_slacks + int(self.epigraph) + int(self.free_time)
         self._build()
+        self.margins = margins if margins is not None else Margins.none(self.num_path, (self.N + 1) * self.nx)
 
     # --- layout ---------------------------------------------------------------------------------------------
     def states(self, z: np.ndarray) -> np.ndarray:
@@ -98,8 +123,23 @@ class HermiteSimpsonProgram:
         self._path_pattern = ca.jacobian(path, z).sparsity()
         lam, mu = ca.SX.sym("lam", defect.shape[0]), ca.SX.sym("mu", path.shape[0])
         lagrangian = ca.dot(lam, defect) + (ca.dot(mu, path) if path.shape[0] else 0)
-        self._hessian = ca.Function("hessian", [z, lam, mu], [ca.hessian(lagrangian, z)[0]])
         self.num_path = path.shape[0]
+        fuel = (h * ca.dot(ca.DM(self._simpson_per_step), z[self.slack_start: self.slack_start + self.num_slacks])
+                - z[self.slack_start + self.num_slacks]) if self.epigraph else ca.SX(0, 1)
+        self._fuel = ca.Function("fuel", [z], [fuel, ca.jacobian(fuel, z)])
+        self._fuel_pattern = ca.jacobian(fuel, z).sparsity()
+        nu_fuel = ca.SX.sym("nu", fuel.shape[0])
+        if fuel.shape[0]:
+            lagrangian = lagrangian + ca.dot(nu_fuel, fuel)
+        self._hessian = ca.Function("hessian", [z, lam, mu, nu_fuel], [ca.hessian(lagrangian, z)[0]])
+
+    @cached_property
+    def _simpson_per_step(self) -> np.ndarray:
+        """Simpson's weights per unit step of every control value, nodes then midpoints (``(1, 2, .., 2, 1)/6`` and
+        ``4/6``), in the order of the controls in ``z``."""
+        node = np.full(self.N + 1, 2 / 6)
+        node[[0, -1]] = 1 / 6
+        return np.concatenate([np.repeat(node, self.nu), np.full(self.N * self.nu, 4 / 6)])
 
     # --- NonconvexProgram -----------------------------------------------------------------------------------
     def initial_guess(self) -> np.ndarray:
@@ -112,6 +152,11 @@ class HermiteSimpsonProgram:
         states = start + s * (end - start)
         control = np.array([_control_guess(v) for v in p.controls])
         parts = [states.ravel(), np.tile(control, N + 1), np.tile(control, N)]
+        if self.fuel:
+            slacks = np.abs(np.tile(control, 2 * N + 1))
+            parts.append(slacks)
+            if self.epigraph:
+                parts.append([p.tf_guess / N * float(self._simpson_per_step @ slacks)])
         if self.free_time:
             parts.append([p.tf_guess])
         return np.concatenate(parts)
@@ -121,6 +166,10 @@ class HermiteSimpsonProgram:
         states = np.array([v.scale for v in p.states])
         controls = np.array([v.scale for v in p.controls])
         parts = [np.tile(states, N + 1), np.tile(controls, 2 * N + 1)]
+        if self.fuel:
+            parts.append(np.tile(controls, 2 * N + 1))
+            if self.epigraph:
+                parts.append([max(self.problem.tf_guess * float(controls.sum()), 1e-6)])
         if self.free_time:
             parts.append([max(self.problem.tf_guess, 1e-6)])
         return np.concatenate(parts)
@@ -146,6 +195,11 @@ class HermiteSimpsonProgram:
         cost = np.zeros(self.num_variables)
         if self.problem.objective == "time":
             cost[-1] = 1.0
+        elif self.epigraph:
+            cost[self.slack_start + self.num_slacks] = 1.0
+        elif self.fuel:
+            h = self.problem.tf / self.N
+            cost[self.slack_start: self.slack_start + self.num_slacks] = h * self._simpson_per_step
         return cost
 
     def linear_constraints(self) -> LinearConstraints:
@@ -159,9 +213,22 @@ class HermiteSimpsonProgram:
         A = sp.coo_matrix((np.ones(len(rows)), (np.arange(len(rows)), rows)), shape=(len(rows), n))
         low, high = self._bounds()
         upper, lower = np.flatnonzero(np.isfinite(high)), np.flatnonzero(np.isfinite(low))
-        G = sp.vstack([sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
-                       sp.coo_matrix((-np.ones(lower.size), (np.arange(lower.size), lower)), shape=(lower.size, n))])
-        h = np.concatenate([high[upper], -low[lower]])
+        blocks = [sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
+                  sp.coo_matrix((-np.ones(lower.size), (np.arange(lower.size), lower)), shape=(lower.size, n))]
+        if self.fuel:
+            # -s <= u <= s for every control value: u - s <= 0 and -u - s <= 0
+            controls = np.arange((N + 1) * nx, self.slack_start)
+            slacks = np.arange(self.slack_start, self.slack_start + self.num_slacks)
+            rows = np.arange(controls.size)
+            for sign in (1.0, -1.0):
+                blocks.append(sp.coo_matrix((np.concatenate([np.full(rows.size, sign), -np.ones(rows.size)]),
+                                             (np.concatenate([rows, rows]), np.concatenate([controls, slacks]))),
+                                            shape=(rows.size, n)))
+        G = sp.vstack(blocks)
+        # a repaired state bound holds with its margin at the nodes next to where the dense check saw it broken
+        tightened = np.concatenate([self.margins.bounds, np.zeros(n - self.margins.bounds.size)])
+        h = np.concatenate([high[upper] - tightened[upper], -low[lower] - tightened[lower],
+                            np.zeros(2 * self.num_slacks)])
         return LinearConstraints(A, np.array(values, dtype=float), G.tocoo(), h)
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -170,6 +237,9 @@ class HermiteSimpsonProgram:
         ul, uh = p.bounds_array(p.controls)
         low = [np.tile(xl, N + 1), np.tile(ul, 2 * N + 1)]
         high = [np.tile(xh, N + 1), np.tile(uh, 2 * N + 1)]
+        if self.fuel:
+            low += [np.zeros(self.num_slacks), np.full(int(self.epigraph), -np.inf)]
+            high += [np.full(self.num_slacks, np.inf), np.full(int(self.epigraph), np.inf)]
         if self.free_time:
             low.append([p.tf_bounds[0]])
             high.append([p.tf_bounds[1]])
@@ -191,15 +261,21 @@ class HermiteSimpsonProgram:
                                       _coo(self._defect_pattern, defect_jac) if jacobians else None, "scaled state"),)
         inequalities = ()
         if self.num_path:
-            inequalities = (ConstraintBlock("path_constraints", np.asarray(path, dtype=float).ravel() + self.margin,
+            values = np.asarray(path, dtype=float).ravel() + self.margins.path
+            inequalities = (ConstraintBlock("path_constraints", values,
                                             _coo(self._path_pattern, path_jac) if jacobians else None),)
+        if self.epigraph:
+            fuel, fuel_jac = self._fuel(z)
+            inequalities += (ConstraintBlock("fuel_epigraph", np.asarray(fuel, dtype=float).ravel(),
+                                             _coo(self._fuel_pattern, fuel_jac) if jacobians else None),)
         return Evaluation(residuals, residual_jacobian, inequalities, equalities)
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
         """CasADi's exact :math:`\\sum \\lambda_k \\nabla^2 e_k + \\sum \\mu_j \\nabla^2 g_j` (the energy residuals are
         linear in ``z``: no curvature of their own)."""
-        mu = weights.inequality if self.num_path else np.zeros(0)
-        hessian = self._hessian(z, weights.equality, mu)
+        mu = weights.inequality[: self.num_path]
+        nu = weights.inequality[self.num_path:]
+        hessian = self._hessian(z, weights.equality, mu, nu)
         return _coo(hessian.sparsity(), hessian).tocsr()
 
 

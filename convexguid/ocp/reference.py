@@ -1,0 +1,48 @@
+"""IPOPT (exact Hessian, through CasADi) on the same Hermite-Simpson NLP the SCP solves: the independent answer a
+user's problem is checked against (tests/test_ocp.py)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from convexguid.ocp.transcription import HermiteSimpsonProgram
+
+
+@dataclass(frozen=True)
+class IpoptAnswer:
+    """IPOPT's solution of the program: success, its objective (the program's), the point, IPOPT's status."""
+
+    success: bool
+    objective: float
+    z: np.ndarray
+    status: str
+
+
+def solve_with_ipopt(program: HermiteSimpsonProgram, z0: np.ndarray | None = None, tol: float = 1e-10) -> IpoptAnswer:
+    """Minimise the program's objective (linear cost plus weighted squared residuals) subject to its defects, path
+    constraints (with their margins), fuel epigraph and linear constraints, from ``z0`` (default: its guess)."""
+    z = ca.SX.sym("z", program.num_variables)
+    objective = ca.dot(ca.DM(program.linear_cost()), z)
+    weights = program.residual_weights()
+    if weights.size:
+        select = program._energy_rows[0]
+        objective += ca.dot(ca.DM(weights), (ca.DM(select.toarray()) @ z) ** 2)
+    defects, _ = program._defects(z)
+    path, _ = program._path(z)
+    fuel, _ = program._fuel(z)
+    lin = program.linear_constraints()
+    A, G = ca.DM(lin.A.toarray()), ca.DM(lin.G.toarray())
+    blocks = [(defects, 0.0, 0.0), (path + ca.DM(program.margins.path), -np.inf, 0.0), (fuel, -np.inf, 0.0),
+              (A @ z - lin.b, 0.0, 0.0), (G @ z - lin.h, -np.inf, 0.0)]
+    g = ca.vertcat(*(b[0] for b in blocks))
+    lbg = np.concatenate([np.full(b[0].shape[0], b[1]) for b in blocks])
+    ubg = np.concatenate([np.full(b[0].shape[0], b[2]) for b in blocks])
+    solver = ca.nlpsol("ipopt", "ipopt", {"x": z, "f": objective, "g": g},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tol})
+    result = solver(x0=program.initial_guess() if z0 is None else z0, lbg=lbg, ubg=ubg)
+    stats = solver.stats()
+    return IpoptAnswer(bool(stats["success"]), float(result["f"]), np.asarray(result["x"]).ravel(),
+                       str(stats["return_status"]))
