@@ -218,3 +218,14 @@ def test_a_module_whose_build_returns_something_else_is_refused(tmp_path, capsys
     module.write_text("def build():\n    return 42\n")
     assert main(["solve", str(module), "--quiet"]) == 2
     assert "build() returned int; it must return a convexguid.ocp.Problem" in capsys.readouterr().err
+
+
+def test_a_wrong_statement_in_a_module_is_exit_2_naming_it(tmp_path, capsys):
+    from convexguid.cli import main
+
+    module = tmp_path / "twice.py"
+    module.write_text("from convexguid.ocp import Problem\n\n\ndef build():\n    p = Problem('twice')\n"
+                      "    p.state('x')\n    p.state('x')\n    return p\n")
+    assert main(["solve", str(module), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "twice: state 'x': the name is already taken" in err and err.count("\n") == 1
