@@ -182,6 +182,28 @@ def test_cw_docking_inside_its_approach_cone_at_minimum_fuel_matches_ipopt():
     assert answer.objective * (1 - 1e-6) <= solution.objective <= answer.objective * (1 + 1e-2)
 
 
+def test_a_cone_over_the_second_half_and_an_entrance_at_half_time_hold_on_the_dense_check():
+    proxops = _example("proxops_openscvx")
+    solution = proxops.build().solve()
+    assert solution.ok, solution.message
+    dense, t = solution.dense.columns, solution.dense.t
+    second = t >= 0.5 * t[-1] - 1e-9
+    lateral = np.hypot(dense["y"][second], dense["z"][second])
+    assert np.all(lateral <= math.tan(proxops.CONE_HALF_ANGLE) * -dense["x"][second] + 1e-3)
+    assert -np.interp(0.5 * t[-1], t, dense["x"]) >= 20.0 - 1e-6
+    assert not np.all(np.hypot(dense["y"], dense["z"]) <= math.tan(proxops.CONE_HALF_ANGLE) * -dense["x"] + 1e-3)
+    answer = solve_with_ipopt(HermiteSimpsonProgram(proxops.build()))
+    assert answer.success, answer.status
+    assert answer.objective * (1 - 1e-6) <= solution.objective <= answer.objective * (1 + 1e-2)
+
+
+def test_a_point_constraint_off_the_grid_is_refused():
+    p = _double_integrator()
+    p.point_constraint("halfway", p.states[0].symbol - 0.4, at=0.33)
+    with pytest.raises(SpecError, match=r"point_constraint 'halfway': at = 0.33 of the final time is not a node"):
+        p.solve()
+
+
 # --- the command line -------------------------------------------------------------------------------------------
 
 

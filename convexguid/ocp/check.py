@@ -78,14 +78,9 @@ class DenseChecker:
     def check(self, program: HermiteSimpsonProgram, z: np.ndarray) -> Check:
         p = program.problem
         track = self.propagate(program, z)
-        checks = []
-        if p.constraints:
-            g = ca.Function("g", [p.state_vector(), p.control_vector(), p.time],
-                            [ca.vertcat(*(c.expression for c in p.constraints))])
-            values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
-                                                                                 strict=True)])
-            checks += [ConstraintCheck(c.name, float(values[:, j].max()), 0.0, "max")
-                       for j, c in enumerate(p.constraints)]
+        excess = self._excess(program, track)
+        checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()), 0.0, "max")
+                  for j, c in enumerate(p.constraints)]
         for i, v in enumerate(p.states):
             if v.upper is not None:
                 checks.append(ConstraintCheck(f"{v.name}_max", float(track.x[:, i].max()), v.upper, "max"))
@@ -110,7 +105,7 @@ class DenseChecker:
         h = program.final_time(z) / N
         interval = np.minimum((track.t // h).astype(int), N - 1)
         path, bounds = program.margins.path.copy(), program.margins.bounds.copy()
-        nc, nx = len(p.constraints), program.nx
+        nx = program.nx
         pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
         excess_by_name = self._excess(program, track)
         for name, excess in excess_by_name.items():
@@ -119,9 +114,9 @@ class DenseChecker:
                 margin = grown_margin(worst, attempt, MARGIN_FLOOR)
                 kind, index = name
                 if kind == "path":
-                    rows = [2 * k * nc + index, (2 * k + 1) * nc + index] + ([] if pinned.get(k + 1) else
-                                                                            [2 * (k + 1) * nc + index])
-                    rows = [r for r in rows if not (pinned.get(k) and r == 2 * k * nc + index)]
+                    # the constraint's rows on this interval: its two nodes (unless all fixed) and its midpoint
+                    rows = [r for r, (point, i, j) in enumerate(program.path_rows) if j == index and (
+                        (point == "mid" and i == k) or (point == "node" and i in (k, k + 1) and not pinned.get(i)))]
                     path[rows] += margin
                 else:
                     state, upper = index
@@ -137,7 +132,8 @@ class DenseChecker:
     @staticmethod
     def _excess(program: HermiteSimpsonProgram, track: DenseTrack) -> dict[tuple, np.ndarray]:
         """Each path constraint's and state bound's excess on the dense grid, by ``("path", j)`` or
-        ``("bound", (state, is_upper))``."""
+        ``("bound", (state, is_upper))``; a constraint imposed over part of the maneuver (or at one node) is
+        ``-inf`` on the samples outside it."""
         p = program.problem
         out: dict[tuple, np.ndarray] = {}
         if p.constraints:
@@ -145,7 +141,12 @@ class DenseChecker:
                             [ca.vertcat(*(c.expression for c in p.constraints))])
             values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
                                                                                  strict=True)])
-            out |= {("path", j): values[:, j] for j in range(len(p.constraints))}
+            share = track.t / track.t[-1]
+            nearest_node = np.abs(share * program.N - np.round(share * program.N)) < 1e-9
+            for j, c in enumerate(p.constraints):
+                inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None
+                          else (share >= c.during[0] - 1e-12) & (share <= c.during[1] + 1e-12))
+                out[("path", j)] = np.where(inside, values[:, j], -np.inf)
         for i, v in enumerate(p.states):
             if v.upper is not None:
                 out[("bound", (i, True))] = track.x[:, i] - v.upper

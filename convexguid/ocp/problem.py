@@ -42,11 +42,20 @@ class Variable:
 
 @dataclass(frozen=True)
 class PathConstraint:
-    """``expression <= 0`` at every node and midpoint (checked densely between them), in ``unit``."""
+    """``expression <= 0`` in ``unit``: over the share ``during`` of the maneuver (every node and midpoint there,
+    checked densely between them), or at the one instant ``at`` (a share of the final time)."""
 
     name: str
     expression: ca.SX
     unit: str
+    during: tuple[float, float] = (0.0, 1.0)
+    at: float | None = None
+
+    def applies(self, share: float, node: bool) -> bool:
+        """Whether the constraint is imposed at the point ``share`` of the maneuver (a node or a midpoint)."""
+        if self.at is not None:
+            return node and abs(share - self.at) < 1e-9
+        return self.during[0] - 1e-12 <= share <= self.during[1] + 1e-12
 
 
 def _number(where: str, value: object, allow_none: bool = True) -> float | None:
@@ -143,15 +152,36 @@ class Problem:
                                 f"{rate.shape})")
             self.rates[name] = rate
 
-    def path_constraint(self, name: str, expression: ca.SX, unit: str = "") -> None:
-        """``expression <= 0`` along the whole trajectory (nonconvex allowed: the engine linearizes it)."""
+    def path_constraint(self, name: str, expression: ca.SX, unit: str = "",
+                        during: tuple[float, float] | None = None) -> None:
+        """``expression <= 0`` along the trajectory, or over the share ``during = (start, end)`` of it (0 to 1 of
+        the final time); nonconvex allowed: the engine linearizes it."""
+        where = f"{self.name}: path_constraint {name!r}"
+        expression = self._scalar(where, name, expression)
+        window = (0.0, 1.0) if during is None else tuple(_number(f"{where}: during", v, allow_none=False)
+                                                          for v in during)
+        if len(window) != 2 or not 0.0 <= window[0] < window[1] <= 1.0:
+            raise SpecError(f"{where}: during: expected (start, end) with 0 <= start < end <= 1, shares of the final "
+                            f"time (got {during!r})")
+        self.constraints.append(PathConstraint(name, expression, unit, window))
+
+    def point_constraint(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
+        """``expression <= 0`` at the instant ``at`` (a share of the final time, on a node of the grid)."""
+        where = f"{self.name}: point_constraint {name!r}"
+        expression = self._scalar(where, name, expression)
+        share = _number(f"{where}: at", at, allow_none=False)
+        if not 0.0 <= share <= 1.0:
+            raise SpecError(f"{where}: at: expected a share of the final time in [0, 1] (got {at!r})")
+        self.constraints.append(PathConstraint(name, expression, unit, at=share))
+
+    def _scalar(self, where: str, name: str, expression) -> ca.SX:
         expression = ca.SX(expression)
         if expression.shape != (1, 1):
-            raise SpecError(f"{self.name}: path_constraint {name!r}: expected a scalar expression "
-                            f"(got shape {expression.shape}); state one constraint per call")
+            raise SpecError(f"{where}: expected a scalar expression (got shape {expression.shape}); state one "
+                            "constraint per call")
         if name in {c.name for c in self.constraints}:
-            raise SpecError(f"{self.name}: path_constraint {name!r}: the name is already taken")
-        self.constraints.append(PathConstraint(name, expression, unit))
+            raise SpecError(f"{where}: the name is already taken")
+        return expression
 
     def minimize_time(self) -> None:
         self.objective = "time"
@@ -191,6 +221,11 @@ class Problem:
             raise SpecError(f"{self.name}: minimize_energy: needs a fixed final time (final_time(fixed=...))")
         if self.objective in ("energy", "fuel") and not self.controls:
             raise SpecError(f"{self.name}: minimize_{self.objective}: the problem has no controls")
+        for c in self.constraints:
+            if c.at is not None and abs(c.at * self.intervals - round(c.at * self.intervals)) > 1e-9:
+                raise SpecError(f"{self.name}: point_constraint {c.name!r}: at = {c.at:g} of the final time is not a "
+                                f"node of the {self.intervals}-interval grid; choose intervals so that at x intervals "
+                                "is a whole number")
         known = {str(v.symbol) for v in (*self.states, *self.controls)} | {str(self.time)}
         for label, expression in [*((f"dynamics of {k}", e) for k, e in self.rates.items()),
                                   *((f"path_constraint {c.name!r}", c.expression) for c in self.constraints)]:

@@ -104,17 +104,26 @@ class HermiteSimpsonProgram:
         f = ca.Function("f", [x, u, t], [p.rate_vector()])
         scale = ca.DM([v.scale for v in p.states])
         defects, constraints = [], []
-        g = ca.Function("g", [x, u, t], [ca.vertcat(*(c.expression for c in p.constraints))]) if p.constraints else None
+        g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
+        self.path_rows: list[tuple[str, int, int]] = []  # (node or mid, index, constraint) of each path row
+
+        def imposed(kind: str, k: int, share: float, state, control, time) -> list:
+            rows = []
+            for j, c in enumerate(p.constraints):
+                if c.applies(share, kind == "node"):
+                    self.path_rows.append((kind, k, j))
+                    rows.append(g[j](state, control, time))
+            return rows
+
         for k in range(N):
             tk = k * h
             fk, fk1 = f(X[:, k], U[:, k], tk), f(X[:, k + 1], U[:, k + 1], tk + h)
             xm = 0.5 * (X[:, k] + X[:, k + 1]) + h / 8 * (fk - fk1)
             fm = f(xm, M[:, k], tk + h / 2)
             defects.append((X[:, k + 1] - X[:, k] - h / 6 * (fk + 4 * fm + fk1)) / scale)
-            if g is not None:
-                constraints += [g(X[:, k], U[:, k], tk), g(xm, M[:, k], tk + h / 2)]
-        if g is not None:
-            constraints.append(g(X[:, N], U[:, N], tf))
+            constraints += imposed("node", k, k / N, X[:, k], U[:, k], tk)
+            constraints += imposed("mid", k, (k + 0.5) / N, xm, M[:, k], tk + h / 2)
+        constraints += imposed("node", N, 1.0, X[:, N], U[:, N], tf)
         defect = ca.vertcat(*defects)
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
