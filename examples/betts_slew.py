@@ -18,7 +18,7 @@ TORQUE_MAX = 50.0
 ANGLE = math.radians(150.0)
 
 
-def build(intervals: int = 50) -> Problem:
+def build(intervals: int = 100) -> Problem:
     p = Problem("betts-asymmetric-slew")
     final_q = (math.sin(ANGLE / 2), 0.0, 0.0, math.cos(ANGLE / 2))
     q = [p.state(f"q{i + 1}", bounds=(-1.0, 1.0), initial=(0.0, 0.0, 0.0, 1.0)[i], final=final_q[i])

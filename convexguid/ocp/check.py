@@ -1,10 +1,11 @@
 """The dense check of a user's plan: the planned control re-propagated through the user's dynamics with SciPy.
 
 The control is the piecewise quadratic through each interval's node, midpoint and node values (what
-Hermite-Simpson assumes). :func:`scipy.integrate.solve_ivp` (DOP853, rtol 1e-10) integrates the dynamics interval
-by interval from the given initial state; on a grid of ``points`` samples per interval the path constraints and
-the state bounds are evaluated, and at the end the propagated state is compared with the stated final values
-(scaled by each state's scale). A failed path constraint is repaired by tightening it at the nodes and midpoints
+Hermite-Simpson assumes), held within the control's bounds (what the actuator can deliver).
+:func:`scipy.integrate.solve_ivp` (DOP853, rtol 1e-10) integrates the dynamics interval by interval from the given
+initial state; on a grid of ``points`` samples per interval the path constraints and the state bounds are
+evaluated, and at the end the propagated state is compared with the stated final values (scaled by each state's
+scale). A broken path constraint or state bound is repaired by tightening it on the intervals where it broke
 (:func:`~convexguid.scp.check_repair.grown_margin`) and re-solving warm.
 """
 
@@ -46,14 +47,18 @@ class DenseChecker:
         self.points = points
 
     def control(self, program: HermiteSimpsonProgram, z: np.ndarray):
-        """The planned control as a function of time (quadratic through node, midpoint, node on each interval)."""
+        """The planned control as a function of time: quadratic through node, midpoint, node on each interval, held
+        within its bounds (the actuator delivers no more: where the quadratic overshoots a bound between nodes, as
+        it does next to a switch of a bang-bang control, the flight gets the bound and the check judges that)."""
         nodes, mids = program.node_controls(z), program.midpoint_controls(z)
         h = program.final_time(z) / program.N
+        low, high = program.problem.bounds_array(program.problem.controls)
 
         def u(t: float) -> np.ndarray:
             k = min(int(t // h), program.N - 1)
             s = (t - k * h) / h
-            return (2 * (s - 0.5) * (s - 1) * nodes[k] - 4 * s * (s - 1) * mids[k] + 2 * s * (s - 0.5) * nodes[k + 1])
+            value = 2 * (s - 0.5) * (s - 1) * nodes[k] - 4 * s * (s - 1) * mids[k] + 2 * s * (s - 0.5) * nodes[k + 1]
+            return np.clip(value, low, high)
 
         return u
 

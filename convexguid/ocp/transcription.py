@@ -224,6 +224,7 @@ class HermiteSimpsonProgram:
         upper, lower = np.flatnonzero(np.isfinite(high)), np.flatnonzero(np.isfinite(low))
         blocks = [sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
                   sp.coo_matrix((-np.ones(lower.size), (np.arange(lower.size), lower)), shape=(lower.size, n))]
+        blocks += self._interpolated_control_bounds()
         if self.fuel:
             # -s <= u <= s for every control value: u - s <= 0 and -u - s <= 0
             controls = np.arange((N + 1) * nx, self.slack_start)
@@ -237,8 +238,43 @@ class HermiteSimpsonProgram:
         # a repaired state bound holds with its margin at the nodes next to where the dense check saw it broken
         tightened = np.concatenate([self.margins.bounds, np.zeros(n - self.margins.bounds.size)])
         h = np.concatenate([high[upper] - tightened[upper], -low[lower] - tightened[lower],
-                            np.zeros(2 * self.num_slacks)])
+                            self._interpolated_control_limits(), np.zeros(2 * self.num_slacks)])
         return LinearConstraints(A, np.array(values, dtype=float), G.tocoo(), h)
+
+    INTERPOLATION_SAMPLES = (0.125, 0.25, 0.375, 0.625, 0.75, 0.875)
+    """Shares of each interval where a bounded control's quadratic (node, midpoint, node) is held within its bounds:
+    next to a switch of a bang-bang control the quadratic through three bounded values overshoots between them."""
+
+    def _interpolated_control_bounds(self) -> list[sp.coo_matrix]:
+        """Rows ``+-(a_0 u_k + a_m u_{k+1/2} + a_1 u_{k+1})``: the quadratic at :data:`INTERPOLATION_SAMPLES` for
+        every bounded control on every interval (upper bounds, then lower; :meth:`_interpolated_control_limits`
+        gives their right-hand sides)."""
+        rows, cols, vals, count = [], [], [], 0
+        for sign, upper in ((1.0, True), (-1.0, False)):
+            for k in range(self.N):
+                for j in self._bounded_controls(upper):
+                    for s in self.INTERPOLATION_SAMPLES:
+                        weights = (2 * (s - 0.5) * (s - 1), -4 * s * (s - 1), 2 * s * (s - 0.5))
+                        for column, weight in zip(self._control_columns(k, j), weights, strict=True):
+                            rows.append(count)
+                            cols.append(column)
+                            vals.append(sign * weight)
+                        count += 1
+        return [sp.coo_matrix((vals, (rows, cols)), shape=(count, self.num_variables))]
+
+    def _interpolated_control_limits(self) -> np.ndarray:
+        controls, samples = self.problem.controls, len(self.INTERPOLATION_SAMPLES)
+        upper = [controls[j].upper for _ in range(self.N) for j in self._bounded_controls(True)]
+        lower = [-controls[j].lower for _ in range(self.N) for j in self._bounded_controls(False)]
+        return np.repeat(np.array(upper + lower, dtype=float), samples)
+
+    def _bounded_controls(self, upper: bool) -> list[int]:
+        return [j for j, v in enumerate(self.problem.controls) if (v.upper if upper else v.lower) is not None]
+
+    def _control_columns(self, k: int, j: int) -> tuple[int, int, int]:
+        """Columns of control ``j`` at node ``k``, midpoint ``k`` and node ``k + 1``."""
+        first, nu = (self.N + 1) * self.nx, self.nu
+        return first + k * nu + j, first + (self.N + 1) * nu + k * nu + j, first + (k + 1) * nu + j
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
         p, N = self.problem, self.N
