@@ -102,9 +102,13 @@ class DenseChecker:
     def repair(self, program: HermiteSimpsonProgram, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
         """Tighten each path constraint and state bound broken between nodes on the intervals where it broke: at
         their two nodes and midpoint, by the worst excess there (grown each round, never at a node whose values
-        are all fixed: there nothing can move). A final-state error is the transcription's, not repaired here:
-        more intervals (``transcription(intervals=...)``) reduce it."""
-        if all(c.violation <= PATH_TOLERANCE for c in check.verification.checks):
+        are all fixed: there nothing can move). None when nothing is broken, or when the last tightening left the
+        worst violation above 90% of what it was (a constraint pinned at a fixed boundary value: the plan is
+        ``unverified`` at once instead of after the whole repair budget). A final-state error is the
+        transcription's, not repaired here: more intervals (``transcription(intervals=...)``) reduce it."""
+        worst_now = check.verification.max_violation
+        if worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation:
+            # nothing broken, or the last tightening did not reduce the violation: another would not either
             return None
         p, track, N = program.problem, check.track, program.N
         h = program.final_time(z) / N
@@ -130,7 +134,7 @@ class DenseChecker:
                     bounds[[node * nx + state for node in nodes]] += margin
         if np.array_equal(path, program.margins.path) and np.array_equal(bounds, program.margins.bounds):
             return None
-        return Repair(HermiteSimpsonProgram(p, Margins(path, bounds)), z,
+        return Repair(HermiteSimpsonProgram(p, Margins(path, bounds, worst_now)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
                       f"margin {max(path.max(initial=0.0), bounds.max(initial=0.0)):.3g})")
 

@@ -53,6 +53,8 @@ class Margins:
 
     path: np.ndarray
     bounds: np.ndarray
+    violation: float = float("inf")
+    """The dense check's worst violation that led to these margins (the next repair must do better)."""
 
     @classmethod
     def none(cls, path_rows: int, state_values: int) -> Margins:
