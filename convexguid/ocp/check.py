@@ -30,6 +30,9 @@ PATH_TOLERANCE = 1e-6
 MARGIN_FLOOR = 1e-6
 """Smallest tightening a repair adds to the path constraints."""
 
+MAX_INTERVALS = 400
+"""A repair doubles the intervals up to this many (the transcription's error, not the constraints, is the cause)."""
+
 
 @dataclass(frozen=True)
 class DenseTrack:
@@ -108,8 +111,8 @@ class DenseChecker:
         transcription's, not repaired here: more intervals (``transcription(intervals=...)``) reduce it."""
         worst_now = check.verification.max_violation
         if worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation:
-            # nothing broken, or the last tightening did not reduce the violation: another would not either
-            return None
+            # nothing broken between nodes, or the last tightening did not reduce it: the grid is too coarse
+            return self._refine(program, z)
         p, track, N = program.problem, check.track, program.N
         h = program.final_time(z) / N
         interval = np.minimum((track.t // h).astype(int), N - 1)
@@ -134,9 +137,17 @@ class DenseChecker:
                     bounds[[node * nx + state for node in nodes]] += margin
         if np.array_equal(path, program.margins.path) and np.array_equal(bounds, program.margins.bounds):
             return None
-        return Repair(HermiteSimpsonProgram(p, Margins(path, bounds, worst_now)), z,
+        return Repair(HermiteSimpsonProgram(p, Margins(path, bounds, worst_now), program.N), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
                       f"margin {max(path.max(initial=0.0), bounds.max(initial=0.0)):.3g})")
+
+    @staticmethod
+    def _refine(program: HermiteSimpsonProgram, z: np.ndarray) -> Repair | None:
+        """Twice the intervals (up to :data:`MAX_INTERVALS`), the plan carried over; None past the limit."""
+        if 2 * program.N > MAX_INTERVALS:
+            return None
+        fine, start = program.refined(z)
+        return Repair(fine, start, f"intervals doubled to {fine.N} (the dense check's errors are the grid's)")
 
     @staticmethod
     def _excess(program: HermiteSimpsonProgram, track: DenseTrack) -> dict[tuple, np.ndarray]:

@@ -64,10 +64,11 @@ class Margins:
 class HermiteSimpsonProgram:
     """The transcribed problem as a :class:`~convexguid.scp.problem.NonconvexProgram`."""
 
-    def __init__(self, problem: Problem, margins: Margins | None = None) -> None:
+    def __init__(self, problem: Problem, margins: Margins | None = None, intervals: int | None = None) -> None:
         problem.check()
         self.problem = problem
-        self.N, self.nx, self.nu = problem.intervals, len(problem.states), len(problem.controls)
+        self.N = intervals if intervals is not None else problem.intervals
+        self.nx, self.nu = len(problem.states), len(problem.controls)
         self.free_time = problem.free_time
         self.fuel = problem.objective == "fuel"
         self.slack_start = (self.N + 1) * (self.nx + self.nu) + self.N * self.nu
@@ -151,6 +152,37 @@ class HermiteSimpsonProgram:
         node = np.full(self.N + 1, 2 / 6)
         node[[0, -1]] = 1 / 6
         return np.concatenate([np.repeat(node, self.nu), np.full(self.N * self.nu, 4 / 6)])
+
+    def refined(self, z: np.ndarray) -> tuple[HermiteSimpsonProgram, np.ndarray]:
+        """The same problem on twice the intervals, and ``z`` carried onto it: the old nodes, the Hermite-Simpson
+        midpoint states as the new nodes between them, the controls' quadratics at the new midpoints (margins
+        start afresh: the finer grid has its own)."""
+        p, N = self.problem, self.N
+        fine = HermiteSimpsonProgram(p, intervals=2 * N)
+        X, U, M = self.states(z), self.node_controls(z), self.midpoint_controls(z)
+        tf, h = self.final_time(z), self.final_time(z) / N
+        rate = ca.Function("rate", [p.state_vector(), p.control_vector(), p.time], [p.rate_vector()])
+        f = np.array([np.asarray(rate(X[k], U[k], k * h)).ravel() for k in range(N + 1)])
+        mid_states = 0.5 * (X[:-1] + X[1:]) + h / 8 * (f[:-1] - f[1:])
+        states = np.empty((2 * N + 1, self.nx))
+        states[0::2], states[1::2] = X, mid_states
+        controls = np.empty((2 * N + 1, self.nu))
+        controls[0::2], controls[1::2] = U, M
+
+        def quadratic(s: float) -> np.ndarray:
+            return 2 * (s - 0.5) * (s - 1) * U[:-1] - 4 * s * (s - 1) * M + 2 * s * (s - 0.5) * U[1:]
+
+        mids = np.empty((2 * N, self.nu))
+        mids[0::2], mids[1::2] = quadratic(0.25), quadratic(0.75)
+        parts = [states.ravel(), controls.ravel(), mids.ravel()]
+        if fine.fuel:
+            slacks = np.abs(np.concatenate([controls.ravel(), mids.ravel()]))
+            parts.append(slacks)
+            if fine.epigraph:
+                parts.append([tf / (2 * N) * float(fine._simpson_per_step @ slacks)])
+        if fine.free_time:
+            parts.append([tf])
+        return fine, np.concatenate(parts)
 
     # --- NonconvexProgram -----------------------------------------------------------------------------------
     def initial_guess(self) -> np.ndarray:
