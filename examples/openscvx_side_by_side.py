@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scipy.integrate import trapezoid
 
 from convexguid.bench_common import bench_document, markdown_grid
 from convexguid.outputs import write_text_atomic
@@ -29,6 +30,7 @@ HERE = Path(__file__).resolve().parent
 OPENSCVX_RUN = r'''
 import json, sys, time
 import numpy as np
+from scipy.integrate import trapezoid
 import openscvx as ox
 t0 = time.perf_counter()
 nodes, n = 5, np.sqrt(3.986004418e14 / 6.778e6**3)
@@ -62,7 +64,7 @@ def judge(t: np.ndarray, x: np.ndarray, u: np.ndarray) -> dict:
     second = t >= 0.5 * tf - 1e-9
     lateral = np.hypot(x[second, 1], x[second, 2])
     cone = float(np.max(lateral - np.tan(np.radians(20.0)) * (-x[second, 0])))
-    return {"final_time_s": float(tf), "fuel_mps": float(np.trapezoid(np.abs(u).sum(axis=1), t)),
+    return {"final_time_s": float(tf), "fuel_mps": float(trapezoid(np.abs(u).sum(axis=1), t)),
             "cone_excess_m": cone, "entrance_depth_m": float(-np.interp(0.5 * tf, t, x[:, 0])),
             "max_accel": float(np.abs(u).max()), "final_position_error_m": float(np.linalg.norm(x[-1, :3])),
             "final_speed_error_mps": float(np.linalg.norm(x[-1, 3:6]))}

@@ -13,11 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from convexguid.ocp.transcription import HermiteSimpsonProgram, Margins
+from convexguid.ocp.transcription import HermiteSimpsonProgram, Margins, quadratic_weights
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
 
@@ -59,15 +58,13 @@ class DenseChecker:
 
         def u(t: float) -> np.ndarray:
             k = min(int(t // h), program.N - 1)
-            s = (t - k * h) / h
-            value = 2 * (s - 0.5) * (s - 1) * nodes[k] - 4 * s * (s - 1) * mids[k] + 2 * s * (s - 0.5) * nodes[k + 1]
-            return np.clip(value, low, high)
+            a, m, b = quadratic_weights((t - k * h) / h)
+            return np.clip(a * nodes[k] + m * mids[k] + b * nodes[k + 1], low, high)
 
         return u
 
     def propagate(self, program: HermiteSimpsonProgram, z: np.ndarray) -> DenseTrack:
-        p = program.problem
-        rate = ca.Function("rate", [p.state_vector(), p.control_vector(), p.time], [p.rate_vector()])
+        rate = program.rate
         u = self.control(program, z)
         tf, N = program.final_time(z), program.N
         state = program.states(z)[0].copy()
@@ -156,9 +153,8 @@ class DenseChecker:
         ``-inf`` on the samples outside it."""
         p = program.problem
         out: dict[tuple, np.ndarray] = {}
-        if p.constraints:
-            g = ca.Function("g", [p.state_vector(), p.control_vector(), p.time],
-                            [ca.vertcat(*(c.expression for c in p.constraints))])
+        g = program.constraint_values
+        if g is not None:
             values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
                                                                                  strict=True)])
             share = track.t / track.t[-1]

@@ -39,11 +39,23 @@ if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
 
 
-def _coo(pattern: ca.Sparsity, values: ca.DM | None = None) -> sp.coo_matrix:
-    """A CasADi sparse matrix as COO with CasADi's structural pattern (fixed across evaluations)."""
-    rows, cols = pattern.get_triplet()
-    data = np.zeros(len(rows)) if values is None else np.asarray(values.nonzeros(), dtype=float)
-    return sp.coo_matrix((data, (np.asarray(rows, dtype=int), np.asarray(cols, dtype=int))), shape=pattern.shape)
+def quadratic_weights(s: float) -> tuple[float, float, float]:
+    """Weights of the node, midpoint and next-node values in the quadratic through them, at the share ``s`` of
+    the interval (Lagrange on 0, 1/2, 1): how a control is held between nodes."""
+    return 2 * (s - 0.5) * (s - 1), -4 * s * (s - 1), 2 * s * (s - 0.5)
+
+
+class _Pattern:
+    """A CasADi structural sparsity read once; each evaluation only fills its values (the engine fixes the
+    subproblem's pattern from the first one)."""
+
+    def __init__(self, pattern: ca.Sparsity) -> None:
+        rows, cols = pattern.get_triplet()
+        self.rows, self.cols = np.asarray(rows, dtype=int), np.asarray(cols, dtype=int)
+        self.shape = pattern.shape
+
+    def coo(self, values: ca.DM) -> sp.coo_matrix:
+        return sp.coo_matrix((np.asarray(values.nonzeros(), dtype=float), (self.rows, self.cols)), shape=self.shape)
 
 
 @dataclass(frozen=True)
@@ -104,7 +116,11 @@ class HermiteSimpsonProgram:
         tf = z[-1] if self.free_time else p.tf
         h = tf / N
         x, u, t = p.state_vector(), p.control_vector(), p.time
-        f = ca.Function("f", [x, u, t], [p.rate_vector()])
+        # the dynamics f(x, u, t) and every path constraint's value (None without any), built once: the
+        # transcription, the grid refinement and the dense check all evaluate these
+        self.rate = f = ca.Function("rate", [x, u, t], [p.rate_vector()])
+        self.constraint_values = (ca.Function("g", [x, u, t], [ca.vertcat(*(c.expression for c in p.constraints))])
+                                  if p.constraints else None)
         scale = ca.DM([v.scale for v in p.states])
         defects, constraints = [], []
         g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
@@ -131,19 +147,21 @@ class HermiteSimpsonProgram:
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
         self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
-        self._defect_pattern = ca.jacobian(defect, z).sparsity()
-        self._path_pattern = ca.jacobian(path, z).sparsity()
+        self._defect_pattern = _Pattern(ca.jacobian(defect, z).sparsity())
+        self._path_pattern = _Pattern(ca.jacobian(path, z).sparsity())
         lam, mu = ca.SX.sym("lam", defect.shape[0]), ca.SX.sym("mu", path.shape[0])
         lagrangian = ca.dot(lam, defect) + (ca.dot(mu, path) if path.shape[0] else 0)
         self.num_path = path.shape[0]
         fuel = (h * ca.dot(ca.DM(self._simpson_per_step), z[self.slack_start: self.slack_start + self.num_slacks])
                 - z[self.slack_start + self.num_slacks]) if self.epigraph else ca.SX(0, 1)
         self._fuel = ca.Function("fuel", [z], [fuel, ca.jacobian(fuel, z)])
-        self._fuel_pattern = ca.jacobian(fuel, z).sparsity()
+        self._fuel_pattern = _Pattern(ca.jacobian(fuel, z).sparsity())
         nu_fuel = ca.SX.sym("nu", fuel.shape[0])
         if fuel.shape[0]:
             lagrangian = lagrangian + ca.dot(nu_fuel, fuel)
-        self._hessian = ca.Function("hessian", [z, lam, mu, nu_fuel], [ca.hessian(lagrangian, z)[0]])
+        hessian = ca.hessian(lagrangian, z)[0]
+        self._hessian = ca.Function("hessian", [z, lam, mu, nu_fuel], [hessian])
+        self._hessian_pattern = _Pattern(hessian.sparsity())
 
     @cached_property
     def _simpson_per_step(self) -> np.ndarray:
@@ -161,8 +179,7 @@ class HermiteSimpsonProgram:
         fine = HermiteSimpsonProgram(p, intervals=2 * N)
         X, U, M = self.states(z), self.node_controls(z), self.midpoint_controls(z)
         tf, h = self.final_time(z), self.final_time(z) / N
-        rate = ca.Function("rate", [p.state_vector(), p.control_vector(), p.time], [p.rate_vector()])
-        f = np.array([np.asarray(rate(X[k], U[k], k * h)).ravel() for k in range(N + 1)])
+        f = np.array([np.asarray(self.rate(X[k], U[k], k * h)).ravel() for k in range(N + 1)])
         mid_states = 0.5 * (X[:-1] + X[1:]) + h / 8 * (f[:-1] - f[1:])
         states = np.empty((2 * N + 1, self.nx))
         states[0::2], states[1::2] = X, mid_states
@@ -170,7 +187,8 @@ class HermiteSimpsonProgram:
         controls[0::2], controls[1::2] = U, M
 
         def quadratic(s: float) -> np.ndarray:
-            return 2 * (s - 0.5) * (s - 1) * U[:-1] - 4 * s * (s - 1) * M + 2 * s * (s - 0.5) * U[1:]
+            a, m, b = quadratic_weights(s)
+            return a * U[:-1] + m * M + b * U[1:]
 
         mids = np.empty((2 * N, self.nu))
         mids[0::2], mids[1::2] = quadratic(0.25), quadratic(0.75)
@@ -218,7 +236,7 @@ class HermiteSimpsonProgram:
         return np.concatenate(parts)
 
     @cached_property
-    def _energy_rows(self) -> tuple[sp.csr_matrix, np.ndarray]:
+    def _energy_rows(self) -> tuple[sp.coo_matrix, np.ndarray]:
         """Residual selection (every node and midpoint control) and Simpson's weights for them."""
         N, nu = self.N, self.nu
         h = (self.problem.tf or 0.0) / N
@@ -229,7 +247,7 @@ class HermiteSimpsonProgram:
         node_weight = np.full(N + 1, 2 * h / 6)
         node_weight[[0, -1]] = h / 6
         weights = np.concatenate([np.repeat(node_weight, nu), np.full(N * nu, 4 * h / 6)])
-        return select, weights
+        return select.tocoo(), weights
 
     def residual_weights(self) -> np.ndarray:
         return self._energy_rows[1] if self.problem.objective == "energy" else np.zeros(0)
@@ -288,8 +306,7 @@ class HermiteSimpsonProgram:
             for k in range(self.N):
                 for j in self._bounded_controls(upper):
                     for s in self.INTERPOLATION_SAMPLES:
-                        weights = (2 * (s - 0.5) * (s - 1), -4 * s * (s - 1), 2 * s * (s - 0.5))
-                        for column, weight in zip(self._control_columns(k, j), weights, strict=True):
+                        for column, weight in zip(self._control_columns(k, j), quadratic_weights(s), strict=True):
                             rows.append(count)
                             cols.append(column)
                             vals.append(sign * weight)
@@ -335,18 +352,18 @@ class HermiteSimpsonProgram:
         if self.problem.objective == "energy":
             select = self._energy_rows[0]
             residuals = select @ z
-            residual_jacobian = select.tocoo() if jacobians else None
+            residual_jacobian = select if jacobians else None
         equalities = (ConstraintBlock("dynamics_defects", np.asarray(defect, dtype=float).ravel(),
-                                      _coo(self._defect_pattern, defect_jac) if jacobians else None, "scaled state"),)
+                                      self._defect_pattern.coo(defect_jac) if jacobians else None, "scaled state"),)
         inequalities = ()
         if self.num_path:
             values = np.asarray(path, dtype=float).ravel() + self.margins.path
             inequalities = (ConstraintBlock("path_constraints", values,
-                                            _coo(self._path_pattern, path_jac) if jacobians else None),)
+                                            self._path_pattern.coo(path_jac) if jacobians else None),)
         if self.epigraph:
             fuel, fuel_jac = self._fuel(z)
             inequalities += (ConstraintBlock("fuel_epigraph", np.asarray(fuel, dtype=float).ravel(),
-                                             _coo(self._fuel_pattern, fuel_jac) if jacobians else None),)
+                                             self._fuel_pattern.coo(fuel_jac) if jacobians else None),)
         return Evaluation(residuals, residual_jacobian, inequalities, equalities)
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
@@ -355,7 +372,7 @@ class HermiteSimpsonProgram:
         mu = weights.inequality[: self.num_path]
         nu = weights.inequality[self.num_path:]
         hessian = self._hessian(z, weights.equality, mu, nu)
-        return _coo(hessian.sparsity(), hessian).tocsr()
+        return self._hessian_pattern.coo(hessian).tocsr()
 
 
 def _control_guess(v) -> float:

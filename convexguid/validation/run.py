@@ -19,7 +19,7 @@ paths are checked before anything is solved; each case's figures folder is repla
 
 A case may take an input from another case's result (``boundary.tf_from: {problem, figure}``, see
 :meth:`~convexguid.spec.common.ProblemBase.input_links`): the runner solves the cases in an order where
-each such case comes after the one it names, and loads it with the figure as an override. Cases whose
+each such case comes after the one it names, and sets the key to the figure's value. Cases whose
 ``reference.comparison`` names the same table are set side by side by :mod:`convexguid.validation.comparisons`,
 which renders the results and solves nothing.
 """
@@ -100,15 +100,14 @@ def compare(spec: ProblemSpec, solution: Solution) -> tuple[Comparison, ...]:
     return tuple(rows)
 
 
-def run_case(path: Path, figure_root: Path, values: Mapping[str, Any] | None = None,
+def run_case(spec: ProblemSpec, figure_root: Path, values: Mapping[str, Any] | None = None,
              publish: bool = True) -> CaseResult:
-    """Solve one case (``values``: keys set from other cases' results, :func:`link_values`), compare it, and draw
-    its pictures.
+    """Solve one loaded case (``values``: keys set from other cases' results, :func:`link_values`), compare it,
+    and draw its pictures.
 
     With ``publish`` the case's figures folder ``figure_root/<name>`` is replaced as a whole, the committed
     pictures that show the same kept; without it they are drawn in a temporary folder and nothing is written.
     """
-    spec = load_problem(path)
     if values:
         spec = with_values(spec, values)
     solution = solve(spec)
@@ -251,7 +250,7 @@ def _run_all(problems: Iterable[str | Path], figure_root: Path, publish: bool) -
     results: dict[int, CaseResult] = {}
     solved: dict[str, Solution] = {}
     for i in order:
-        results[i] = run_case(paths[i], figure_root, link_values(specs[i], solved), publish=publish)
+        results[i] = run_case(specs[i], figure_root, link_values(specs[i], solved), publish=publish)
         solved[specs[i].name] = results[i].solution
     return [results[i] for i in range(len(paths))]
 
