@@ -27,7 +27,7 @@ from scipy.optimize import brentq
 from convexguid.errors import SpecError
 from convexguid.ocp import Problem
 from convexguid.ocp.reference import solve_with_ipopt
-from convexguid.ocp.transcription import HermiteSimpsonProgram
+from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,7 +1,7 @@
 """The dense check of a user's plan: the planned control re-propagated through the user's dynamics with SciPy.
 
-The control is the piecewise quadratic through each interval's node, midpoint and node values (what
-Hermite-Simpson assumes), held within the control's bounds (what the actuator can deliver).
+The control is what the transcription holds between nodes (Hermite-Simpson's quadratic through node, midpoint and
+node; a zero- or first-order hold), held within the control's bounds (what the actuator can deliver).
 :func:`scipy.integrate.solve_ivp` (DOP853, rtol 1e-10) integrates the dynamics interval by interval from the given
 initial state; on a grid of ``points`` samples per interval the path constraints and the state bounds are
 evaluated, and at the end the propagated state is compared with the stated final values (scaled by each state's
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from convexguid.ocp.transcription import HermiteSimpsonProgram, Margins, quadratic_weights
+from convexguid.ocp.transcription import Margins, Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
 
@@ -43,27 +43,20 @@ class DenseTrack:
 
 
 class DenseChecker:
-    """:class:`~convexguid.scp.check_repair.PlanChecker` of a :class:`HermiteSimpsonProgram`."""
+    """:class:`~convexguid.scp.check_repair.PlanChecker` of a :class:`Transcription`."""
 
     def __init__(self, points: int = 20) -> None:
         self.points = points
 
-    def control(self, program: HermiteSimpsonProgram, z: np.ndarray):
-        """The planned control as a function of time: quadratic through node, midpoint, node on each interval, held
-        within its bounds (the actuator delivers no more: where the quadratic overshoots a bound between nodes, as
-        it does next to a switch of a bang-bang control, the flight gets the bound and the check judges that)."""
-        nodes, mids = program.node_controls(z), program.midpoint_controls(z)
-        h = program.final_time(z) / program.N
+    def control(self, program: Transcription, z: np.ndarray):
+        """The planned control as a function of time, as the transcription holds it between nodes, within its
+        bounds (the actuator delivers no more: where Hermite-Simpson's quadratic overshoots a bound between nodes,
+        as it does next to a switch of a bang-bang control, the flight gets the bound and the check judges that)."""
+        planned = program.control_function(z)
         low, high = program.problem.bounds_array(program.problem.controls)
+        return lambda t: np.clip(planned(t), low, high)
 
-        def u(t: float) -> np.ndarray:
-            k = min(int(t // h), program.N - 1)
-            a, m, b = quadratic_weights((t - k * h) / h)
-            return np.clip(a * nodes[k] + m * mids[k] + b * nodes[k + 1], low, high)
-
-        return u
-
-    def propagate(self, program: HermiteSimpsonProgram, z: np.ndarray) -> DenseTrack:
+    def propagate(self, program: Transcription, z: np.ndarray) -> DenseTrack:
         rate = program.rate
         u = self.control(program, z)
         tf, N = program.final_time(z), program.N
@@ -80,7 +73,7 @@ class DenseChecker:
         t = np.concatenate(times)
         return DenseTrack(t, np.vstack(states), np.array([u(s) for s in t]).reshape(t.size, program.nu))
 
-    def check(self, program: HermiteSimpsonProgram, z: np.ndarray) -> Check:
+    def check(self, program: Transcription, z: np.ndarray) -> Check:
         p = program.problem
         track = self.propagate(program, z)
         excess = self._excess(program, track)
@@ -99,7 +92,7 @@ class DenseChecker:
                                     {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE})
         return Check(verification, track)
 
-    def repair(self, program: HermiteSimpsonProgram, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
+    def repair(self, program: Transcription, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
         """Tighten each path constraint and state bound broken between nodes on the intervals where it broke: at
         their two nodes and midpoint, by the worst excess there (grown each round, never at a node whose values
         are all fixed: there nothing can move). None when nothing is broken, or when the last tightening left the
@@ -134,12 +127,12 @@ class DenseChecker:
                     bounds[[node * nx + state for node in nodes]] += margin
         if np.array_equal(path, program.margins.path) and np.array_equal(bounds, program.margins.bounds):
             return None
-        return Repair(HermiteSimpsonProgram(p, Margins(path, bounds, worst_now), program.N), z,
+        return Repair(program.with_margins(Margins(path, bounds, worst_now)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
                       f"margin {max(path.max(initial=0.0), bounds.max(initial=0.0)):.3g})")
 
     @staticmethod
-    def _refine(program: HermiteSimpsonProgram, z: np.ndarray) -> Repair | None:
+    def _refine(program: Transcription, z: np.ndarray) -> Repair | None:
         """Twice the intervals (up to :data:`MAX_INTERVALS`), the plan carried over; None past the limit."""
         if 2 * program.N > MAX_INTERVALS:
             return None
@@ -147,7 +140,7 @@ class DenseChecker:
         return Repair(fine, start, f"intervals doubled to {fine.N} (the dense check's errors are the grid's)")
 
     @staticmethod
-    def _excess(program: HermiteSimpsonProgram, track: DenseTrack) -> dict[tuple, np.ndarray]:
+    def _excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:
         """Each path constraint's and state bound's excess on the dense grid, by ``("path", j)`` or
         ``("bound", (state, is_upper))``; a constraint imposed over part of the maneuver (or at one node) is
         ``-inf`` on the samples outside it."""

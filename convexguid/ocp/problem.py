@@ -26,6 +26,11 @@ import numpy as np
 from convexguid.errors import SpecError
 
 
+TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh")
+"""The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
+:mod:`convexguid.ocp.hold`)."""
+
+
 @dataclass(frozen=True)
 class Variable:
     """A scalar state or control: its symbol, bounds (``None``: none), boundary values and typical magnitude."""
@@ -82,6 +87,8 @@ class Problem:
         self.tf_guess: float | None = None
         self.objective: str | None = None
         self.intervals = 30
+        self.method = "hermite-simpson"
+        self.substeps = 4
         self.time = ca.SX.sym("t")
 
     # --- declarations -----------------------------------------------------------------------------------------
@@ -195,11 +202,18 @@ class Problem:
         final time may be fixed or free."""
         self.objective = "fuel"
 
-    def transcription(self, intervals: int) -> None:
-        """Hermite-Simpson on ``intervals`` equal intervals."""
+    def transcription(self, intervals: int, method: str = "hermite-simpson", substeps: int = 4) -> None:
+        """``intervals`` equal intervals, transcribed by ``method``: ``"hermite-simpson"`` (collocation, the control
+        quadratic between nodes), ``"zoh"`` (the control constant on each interval) or ``"foh"`` (linear between
+        nodes); the holds integrate the dynamics across each interval by ``substeps`` Runge-Kutta steps."""
+        where = f"{self.name}: transcription"
         if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < 2:
-            raise SpecError(f"{self.name}: transcription: intervals: expected an integer >= 2 (got {intervals!r})")
-        self.intervals = intervals
+            raise SpecError(f"{where}: intervals: expected an integer >= 2 (got {intervals!r})")
+        if method not in TRANSCRIPTION_METHODS:
+            raise SpecError(f"{where}: method: expected one of {', '.join(TRANSCRIPTION_METHODS)} (got {method!r})")
+        if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
+            raise SpecError(f"{where}: substeps: expected an integer >= 1 (got {substeps!r})")
+        self.intervals, self.method, self.substeps = intervals, method, substeps
 
     # --- checks and solve -------------------------------------------------------------------------------------
     def check(self) -> None:

@@ -1,4 +1,4 @@
-"""IPOPT (exact Hessian, through CasADi) on the same Hermite-Simpson NLP the SCP solves: the independent answer a
+"""IPOPT (exact Hessian, through CasADi) on the same transcribed NLP the SCP solves: the independent answer a
 user's problem is checked against (tests/test_ocp.py)."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from convexguid.ocp.transcription import HermiteSimpsonProgram
+from convexguid.ocp.transcription import Transcription
 
 
 @dataclass(frozen=True)
@@ -21,7 +21,7 @@ class IpoptAnswer:
     status: str
 
 
-def solve_with_ipopt(program: HermiteSimpsonProgram, z0: np.ndarray | None = None, tol: float = 1e-10) -> IpoptAnswer:
+def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: float = 1e-10) -> IpoptAnswer:
     """Minimise the program's objective (linear cost plus weighted squared residuals) subject to its defects, path
     constraints (with their margins), fuel epigraph and linear constraints, from ``z0`` (default: its guess)."""
     z = ca.SX.sym("z", program.num_variables)

@@ -10,7 +10,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from convexguid.ocp.check import DenseChecker
-from convexguid.ocp.transcription import HermiteSimpsonProgram
+from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
+from convexguid.ocp.hold import FirstOrderHoldProgram, ZeroOrderHoldProgram
+from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import solve_verified
 from convexguid.scp.engine import Log
 from convexguid.scp.problem import ProgramSize, SCPSettings
@@ -39,12 +41,22 @@ class OcpFigures(Figures):
     controls: tuple[str, ...] = ()
 
 
+TRANSCRIPTIONS = {program.method: program
+                  for program in (HermiteSimpsonProgram, ZeroOrderHoldProgram, FirstOrderHoldProgram)}
+"""Every transcription by the name :meth:`~convexguid.ocp.problem.Problem.transcription` takes."""
+
+
+def transcribe(problem: Problem) -> Transcription:
+    """The problem transcribed as it says (Hermite-Simpson unless it chose a hold)."""
+    return TRANSCRIPTIONS[problem.method](problem)
+
+
 def solve_problem(problem: Problem, max_iterations: int = 100, verification_points: int = 20,
                   log: Log | None = None) -> Solution:
     """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise (``log`` gets one
     record per SCP iteration)."""
     started = time.perf_counter()
-    program = HermiteSimpsonProgram(problem)
+    program = transcribe(problem)
     if problem.objective == "time":
         # weights in units of the guessed final time (the objective at the start)
         settings = SCPSettings(max_iterations=max_iterations, penalty_unit="objective", penalty=30.0, penalty_max=3e6)
