@@ -6,7 +6,9 @@ Every position component within +-100 m, every velocity within +-2 m/s, every ac
 Over the second half of the maneuver it stays in an R-bar approach cone of 20 deg about -x (sqrt(y^2 + z^2) <=
 tan(20 deg) (-x), written squared), entered at least 20 m below the target at half time. The final time is free,
 at most 180 s. OpenSCvx's file minimizes nothing (its cost is zero: any feasible plan); this one minimizes fuel,
-the integral of |a_x| + |a_y| + |a_z|. benchmarks/openscvx_proxops.md sets the two side by side.
+the integral of |a_x| + |a_y| + |a_z|, with the acceleration linear between nodes (a first-order hold: the
+Clohessy-Wiltshire flow across each interval is exact, so the dense re-propagation lands where the plan does).
+validation/BENCHMARKS_ocp.md sets the two side by side (examples/openscvx_side_by_side.py).
 Run: python examples/proxops_openscvx.py
 """
 
@@ -21,7 +23,7 @@ CONE_HALF_ANGLE = math.radians(20.0)
 A_MAX, V_MAX, P_MAX = 0.1, 2.0, 100.0
 
 
-def build(intervals: int = 40) -> Problem:
+def build(intervals: int = 20, method: str = "foh") -> Problem:
     n = MEAN_MOTION
     p = Problem("proxops-cw")
     x, y, z = (p.state(axis, bounds=(-P_MAX, P_MAX), initial=start, final=0.0)
@@ -36,7 +38,7 @@ def build(intervals: int = 40) -> Problem:
     p.point_constraint("cone_entrance", 20.0 + x, at=0.5, unit="m")
     p.final_time(bounds=(10.0, 180.0), guess=120.0)
     p.minimize_fuel()
-    p.transcription(intervals)
+    p.transcription(intervals, method)
     return p
 
 

@@ -26,8 +26,8 @@ from scipy.optimize import brentq
 
 from convexguid.errors import SpecError
 from convexguid.ocp import Problem
-from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
+from convexguid.ocp.reference import solve_with_ipopt
 
 ROOT = Path(__file__).resolve().parents[1]
 

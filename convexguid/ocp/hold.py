@@ -9,12 +9,13 @@ defect is the node state less the flow from the previous node under the held con
     x_{k+1} - \\Phi_h(x_k, u_k, u_{k+1}, t_k) = 0,
 
 divided by the states' scales, with :math:`\\Phi_h` ``substeps`` classical Runge-Kutta steps across the interval
-(fourth order: on linear dynamics such as Clohessy-Wiltshire the node-to-node map is the exact discretization to
-round-off for any step the dynamics' own time scale allows; the dense check judges it, and a grid that is too coarse
-is doubled). CasADi differentiates through the steps: the Jacobian is the exact state-transition and control
-sensitivity of the discrete map (the discretization of SCPToolbox's and OpenSCvx's PTR, by automatic
-differentiation instead of integrating the variational equations). Path constraints hold at the nodes; the dense
-check judges them between. The objectives' quadrature: the rectangle rule for a zero-order hold (exact), the
+(fourth order: on Clohessy-Wiltshire with four steps across a 9 s interval the map is within 3e-9 (relative) of
+the state from the exact discretization, the matrix exponential, and the error falls 256-fold for four times the
+steps, tests/test_ocp_holds.py; the dense check judges the flown plan, and a grid that is too coarse is doubled).
+CasADi differentiates through the steps: the Jacobian is the exact sensitivity of the discrete map to the node
+state, the control values and the final time (what SCPToolbox's and OpenSCvx's PTR get by integrating the
+variational equations, here by automatic differentiation). Path constraints hold at the nodes; the dense check
+judges them between. The objectives' quadrature: the rectangle rule for a zero-order hold (exact), the
 trapezoidal rule on the node values for a first-order hold.
 """
 

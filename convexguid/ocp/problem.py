@@ -25,7 +25,6 @@ import numpy as np
 
 from convexguid.errors import SpecError
 
-
 TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh")
 """The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
 :mod:`convexguid.ocp.hold`)."""

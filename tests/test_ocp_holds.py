@@ -1,0 +1,148 @@
+"""Zero- and first-order-hold transcriptions of a user's problem (convexguid.ocp.hold) against closed forms.
+
+* The node-to-node map of the Clohessy-Wiltshire dynamics under a held acceleration converges to the exact
+  discretization (the matrix exponential of the augmented system) at fourth order in the Runge-Kutta step.
+* A rest-to-rest double integrator at minimum energy: the SCP's plan is the weighted least-norm solution of the
+  discrete problem, computed here in closed form (a zero-order hold's and a first-order hold's input matrices
+  integrated by hand).
+* A finer grid carries the plan over unchanged (the same defects, the same objective).
+* OpenSCvx's proximity operation (examples/proxops_openscvx.py): verified, IPOPT's fuel on the same NLP, and the
+  same answer when the mean motion moves by 1e-12.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from convexguid.errors import SpecError
+from convexguid.ocp import Problem
+from convexguid.ocp.hold import FirstOrderHoldProgram, ZeroOrderHoldProgram
+from convexguid.ocp.reference import solve_with_ipopt
+from convexguid.ocp.solve import transcribe
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _proxops():
+    spec = importlib.util.spec_from_file_location("proxops_openscvx", ROOT / "examples" / "proxops_openscvx.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _double_integrator(method: str, intervals: int = 8) -> Problem:
+    p = Problem("double-integrator")
+    x = p.state("x", initial=0.0, final=1.0)
+    v = p.state("v", initial=0.0, final=0.0)
+    u = p.control("u")
+    p.dynamics({x: v, v: u})
+    p.final_time(fixed=2.0)
+    p.minimize_energy()
+    p.transcription(intervals, method=method)
+    return p
+
+
+@pytest.mark.parametrize("method", ["zoh", "foh"])
+def test_the_clohessy_wiltshire_flow_is_the_exact_discretization_to_fourth_order(method):
+    px = _proxops()
+    n, h = px.MEAN_MOTION, 9.0
+    A = np.zeros((6, 6))
+    A[:3, 3:] = np.eye(3)
+    A[3, 0], A[3, 4], A[4, 3], A[5, 2] = 3 * n**2, 2 * n, -2 * n, -(n**2)
+    # augmented with the control and (first-order hold) its rate across the interval
+    augmented = np.zeros((12, 12))
+    augmented[:6, :6], augmented[3:6, 6:9], augmented[6:9, 9:12] = A, np.eye(3), np.eye(3) / h
+    x0, start = np.array([3.0, -80.0, 2.0, 0.1, 1.5, -0.2]), np.array([0.05, -0.1, 0.02])
+    end = np.array([-0.08, 0.03, 0.1]) if method == "foh" else start
+    exact = (expm(augmented * h) @ np.concatenate([x0, start, end - start]))[:6]
+    errors = []
+    for substeps in (4, 16):
+        problem = px.build(20, method)
+        problem.transcription(20, method, substeps)
+        errors.append(np.abs(np.asarray(transcribe(problem).flow(x0, start, end, 0.0, h)).ravel() - exact).max())
+    assert errors[0] <= 1e-8 * np.abs(exact).max()  # the default four steps on a 9 s interval
+    assert errors[1] <= max(errors[0] / 4**3.5, 1e-12 * np.abs(exact).max())  # fourth order, to round-off
+
+
+def _least_norm_energy(method: str, intervals: int, tf: float) -> float:
+    """min h sum_j w_j u_j^2 subject to reaching (1, 0) from rest, on the discrete double integrator."""
+    h = tf / intervals
+    phi = np.array([[1.0, h], [0.0, 1.0]])
+    if method == "zoh":
+        inputs = [(np.array([h**2 / 2, h]), 0)]  # x_{k+1} = phi x_k + gamma u_k
+        count, weights = intervals, np.ones(intervals)
+    else:  # x_{k+1} = phi x_k + gamma_0 u_k + gamma_1 u_{k+1}
+        inputs = [(np.array([h**2 / 3, h / 2]), 0), (np.array([h**2 / 6, h / 2]), 1)]
+        count, weights = intervals + 1, np.r_[0.5, np.ones(intervals - 1), 0.5]
+    C = np.zeros((2, count))
+    for k in range(intervals):
+        carried = np.linalg.matrix_power(phi, intervals - 1 - k)
+        for gamma, offset in inputs:
+            C[:, k + offset] += carried @ gamma
+    W = h * weights
+    u = (C / W).T @ np.linalg.solve((C / W) @ C.T, np.array([1.0, 0.0]))
+    return float(W @ u**2)
+
+
+@pytest.mark.parametrize("method", ["zoh", "foh"])
+def test_minimum_energy_is_the_discrete_least_norm_solution(method):
+    solution = _double_integrator(method).solve()
+    assert solution.ok and solution.kkt["met"], solution.message
+    assert solution.objective == pytest.approx(_least_norm_energy(method, 8, 2.0), rel=1e-8)
+    # the dense re-propagation of the held control arrives where the plan does
+    assert solution.verification.final_state_error <= 1e-9
+
+
+@pytest.mark.parametrize("program_type", [ZeroOrderHoldProgram, FirstOrderHoldProgram])
+def test_a_finer_grid_carries_the_plan_over(program_type):
+    problem = _double_integrator(program_type.method)
+    program = program_type(problem)
+    z = program.initial_guess() + np.random.default_rng(3).normal(0.0, 0.1, program.num_variables)
+    fine, carried = program.refined(z)
+    assert fine.N == 2 * program.N
+    coarse_defects = program.evaluate(z).equalities[0].values.reshape(program.N, -1)
+    fine_defects = fine.evaluate(carried).equalities[0].values.reshape(fine.N, -1)
+    # the new node inside each interval lies on the flow: the second half carries the whole interval's defect
+    assert np.abs(fine_defects[0::2]).max() <= 1e-12
+    assert np.allclose(fine_defects[1::2], coarse_defects, atol=1e-12)
+    if program_type is ZeroOrderHoldProgram:  # the rectangle rule on a held control: the same energy
+        energy = program.residual_weights() @ program.evaluate(z).residuals ** 2
+        assert fine.residual_weights() @ fine.evaluate(carried).residuals ** 2 == pytest.approx(energy, rel=1e-12)
+
+
+def test_openscvx_proximity_operation_is_verified_and_ipopts_optimum():
+    px = _proxops()
+    solution = px.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    checks = {c.name: c for c in solution.verification.checks}
+    assert checks["approach_cone"].violation <= 1e-6 and checks["cone_entrance"].violation <= 1e-6
+    dense = solution.dense.columns
+    assert np.abs(np.column_stack([dense["ax"], dense["ay"], dense["az"]])).max() <= px.A_MAX + 1e-12
+    answer = solve_with_ipopt(transcribe(px.build()))
+    assert answer.success, answer.status
+    assert solution.objective == pytest.approx(answer.objective, rel=1e-5)
+
+
+def test_openscvx_proximity_operation_does_not_hang_on_round_off(monkeypatch):
+    px = _proxops()
+    fuels = []
+    for scale in (1.0, 1 + 1e-12, 1 - 1e-12):
+        monkeypatch.setattr(px, "MEAN_MOTION", _proxops().MEAN_MOTION * scale)
+        solution = px.build().solve()
+        assert solution.ok, solution.message
+        fuels.append(solution.objective)
+    assert max(fuels) - min(fuels) <= 1e-8 * fuels[0]
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    ({"intervals": 10, "method": "rk4"}, r"^demo: transcription: method: expected one of hermite-simpson, zoh, foh"),
+    ({"intervals": 10, "method": "zoh", "substeps": 0}, r"^demo: transcription: substeps: expected an integer >= 1"),
+])
+def test_a_wrong_transcription_is_one_line(arguments, message):
+    with pytest.raises(SpecError, match=message):
+        Problem("demo").transcription(**arguments)
