@@ -106,7 +106,7 @@ class DenseChecker:
         p, track, N = program.problem, check.track, program.N
         h = program.final_time(z) / N
         interval = np.minimum((track.t // h).astype(int), N - 1)
-        path, bounds = program.margins.path.copy(), program.margins.bounds.copy()
+        path, bounds, cone = program.margins.path.copy(), program.margins.bounds.copy(), program.margins.cone.copy()
         nx = program.nx
         pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
         excess_by_name = self._excess(program, track)
@@ -117,19 +117,23 @@ class DenseChecker:
                 kind, index = name
                 if kind == "path":
                     # the constraint's rows on this interval: its two nodes (unless all fixed) and its midpoint
-                    rows = [r for r, (point, i, j) in enumerate(program.path_rows) if j == index and (
+                    stated_cone = p.constraints[index].cone is not None
+                    table, target = (program.cone_rows, cone) if stated_cone else (program.path_rows, path)
+                    rows = [r for r, (point, i, j) in enumerate(table) if j == index and (
                         (point == "mid" and i == k) or (point == "node" and i in (k, k + 1) and not pinned.get(i)))]
-                    path[rows] += margin
+                    target[rows] += margin
                 else:
                     state, upper = index
                     fixed = {0: p.states[state].initial is not None, N: p.states[state].final is not None}
                     nodes = [node for node in (k, k + 1) if not fixed.get(node)]
                     bounds[[node * nx + state for node in nodes]] += margin
-        if np.array_equal(path, program.margins.path) and np.array_equal(bounds, program.margins.bounds):
+        old = program.margins
+        if all(np.array_equal(a, b) for a, b in ((path, old.path), (bounds, old.bounds), (cone, old.cone))):
             return None
-        return Repair(program.with_margins(Margins(path, bounds, worst_now)), z,
+        largest = max(path.max(initial=0.0), bounds.max(initial=0.0), cone.max(initial=0.0))
+        return Repair(program.with_margins(Margins(path, bounds, worst_now, cone)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
-                      f"margin {max(path.max(initial=0.0), bounds.max(initial=0.0)):.3g})")
+                      f"margin {largest:.3g})")
 
     @staticmethod
     def _refine(program: Transcription, z: np.ndarray) -> Repair | None:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
@@ -54,6 +54,9 @@ class PathConstraint:
     unit: str
     during: tuple[float, float] = (0.0, 1.0)
     at: float | None = None
+    cone: tuple[ca.SX, ca.SX] | None = None
+    """For a second-order cone ``||vector|| <= bound``: ``(bound, vector)``, affine in states and controls (kept
+    exact in every subproblem); ``expression`` is then ``||vector|| - bound``, what the dense check evaluates."""
 
     def applies(self, share: float, node: bool) -> bool:
         """Whether the constraint is imposed at the point ``share`` of the maneuver (a node or a midpoint)."""
@@ -85,6 +88,8 @@ class Problem:
         self.tf_bounds: tuple[float, float] | None = None
         self.tf_guess: float | None = None
         self.objective: str | None = None
+        self.fuel_norm = 1
+        self.terminal: ca.SX | None = None
         self.intervals = 30
         self.method = "hermite-simpson"
         self.substeps = 4
@@ -171,6 +176,28 @@ class Problem:
                             f"time (got {during!r})")
         self.constraints.append(PathConstraint(name, expression, unit, window))
 
+    def cone_constraint(self, name: str, vector, bound, unit: str = "",
+                        during: tuple[float, float] | None = None) -> None:
+        """``||vector|| <= bound``, a second-order cone on expressions affine in the states and controls (a thrust
+        magnitude, an approach or glide-slope cone): kept exact in every convex subproblem, at every node (over
+        the share ``during`` of the maneuver); the dense check judges it between the nodes."""
+        where = f"{self.name}: cone_constraint {name!r}"
+        entries = [ca.SX(e) for e in (vector if isinstance(vector, (list, tuple)) else [vector])]
+        bound = ca.SX(bound)
+        if not entries or any(e.shape != (1, 1) for e in entries) or bound.shape != (1, 1):
+            raise SpecError(f"{where}: expected a list of scalar expressions and a scalar bound")
+        variables = ca.vertcat(self.state_vector(), self.control_vector(), self.time)
+        for label, e in [*((f"vector entry {i + 1}", e) for i, e in enumerate(entries)), ("bound", bound)]:
+            if ca.depends_on(ca.jacobian(e, variables), variables):
+                raise SpecError(f"{where}: {label} ({e}) is not affine in the states and controls, so the cone is "
+                                "not convex as stated; state it with path_constraint (the engine linearizes it)")
+            if ca.depends_on(e, self.time):
+                raise SpecError(f"{where}: {label} ({e}) depends on the time; a cone is stated on states and "
+                                "controls only")
+        vector = ca.vertcat(*entries)
+        self.path_constraint(name, ca.norm_2(vector) - bound, unit, during)
+        self.constraints[-1] = replace(self.constraints[-1], cone=(bound, vector))
+
     def point_constraint(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
         """``expression <= 0`` at the instant ``at`` (a share of the final time, on a node of the grid)."""
         where = f"{self.name}: point_constraint {name!r}"
@@ -196,10 +223,22 @@ class Problem:
         """Minimise the integral of the sum of the squared controls (a fixed final time)."""
         self.objective = "energy"
 
-    def minimize_fuel(self) -> None:
-        """Minimise the integral of the sum of the controls' absolute values (one thruster pair per axis); the
+    def minimize_fuel(self, norm: int = 1) -> None:
+        """Minimise the integral of the control's 1-norm (``norm=1``: one thruster pair per axis) or 2-norm
+        (``norm=2``: one gimballed engine, the thrust magnitude, a second-order cone per control value); the
         final time may be fixed or free."""
-        self.objective = "fuel"
+        if norm not in (1, 2):
+            raise SpecError(f"{self.name}: minimize_fuel: norm: expected 1 or 2 (got {norm!r})")
+        self.objective, self.fuel_norm = "fuel", norm
+
+    def minimize_terminal(self, expression) -> None:
+        """Minimise a function of the final state (and of :attr:`time`, the final time), e.g. ``-mass`` for the
+        most mass left: a linear cost when it is affine, else an epigraph the engine linearizes."""
+        expression = ca.SX(expression)
+        if expression.shape != (1, 1):
+            raise SpecError(f"{self.name}: minimize_terminal: expected a scalar expression (got shape "
+                            f"{expression.shape})")
+        self.objective, self.terminal = "terminal", expression
 
     def transcription(self, intervals: int, method: str = "hermite-simpson", substeps: int = 4) -> None:
         """``intervals`` equal intervals, transcribed by ``method``: ``"hermite-simpson"`` (collocation, the control
@@ -227,7 +266,7 @@ class Problem:
                             "problem.final_time(bounds=(lower, upper))")
         if self.objective is None:
             raise SpecError(f"{self.name}: objective: not stated; call problem.minimize_time(), "
-                            "problem.minimize_energy() or problem.minimize_fuel()")
+                            "problem.minimize_energy(), problem.minimize_fuel() or problem.minimize_terminal(...)")
         if self.objective == "time" and self.tf_bounds is None:
             raise SpecError(f"{self.name}: minimize_time: the final time is fixed; give final_time(bounds=...)")
         if self.objective == "energy" and self.tf is None:
@@ -240,8 +279,13 @@ class Problem:
                                 f"node of the {self.intervals}-interval grid; choose intervals so that at x intervals "
                                 "is a whole number")
         known = {str(v.symbol) for v in (*self.states, *self.controls)} | {str(self.time)}
+        terminal = [("minimize_terminal", self.terminal)] if self.terminal is not None else []
+        if self.terminal is not None and ca.depends_on(self.terminal, self.control_vector()):
+            raise SpecError(f"{self.name}: minimize_terminal: {self.terminal} uses a control; a terminal cost is a "
+                            "function of the final state and time")
         for label, expression in [*((f"dynamics of {k}", e) for k, e in self.rates.items()),
-                                  *((f"path_constraint {c.name!r}", c.expression) for c in self.constraints)]:
+                                  *((f"path_constraint {c.name!r}", c.expression) for c in self.constraints),
+                                  *terminal]:
             unknown = sorted({str(s) for s in ca.symvar(expression)} - known)
             if unknown:
                 raise SpecError(f"{self.name}: {label}: uses {', '.join(unknown)}, which is not a state or control "

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+import scipy.sparse as sp
 
 from convexguid.ocp.transcription import Transcription
 
@@ -23,7 +24,8 @@ class IpoptAnswer:
 
 def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: float = 1e-10) -> IpoptAnswer:
     """Minimise the program's objective (linear cost plus weighted squared residuals) subject to its defects, path
-    constraints (with their margins), fuel epigraph and linear constraints, from ``z0`` (default: its guess)."""
+    constraints (with their margins), cones (squared), objective epigraph and linear constraints, from ``z0``
+    (default: its guess)."""
     z = ca.SX.sym("z", program.num_variables)
     objective = ca.dot(ca.DM(program.linear_cost()), z)
     weights = program.residual_weights()
@@ -32,11 +34,19 @@ def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: 
         objective += ca.dot(ca.DM(weights), (ca.DM(select.toarray()) @ z) ** 2)
     defects, _ = program._defects(z)
     path, _ = program._path(z)
-    fuel, _ = program._fuel(z)
+    epigraph, _ = program._objective_epigraph(z)
     lin = program.linear_constraints()
     A, G = ca.DM(lin.A.toarray()), ca.DM(lin.G.toarray())
-    blocks = [(defects, 0.0, 0.0), (path + ca.DM(program.margins.path), -np.inf, 0.0), (fuel, -np.inf, 0.0),
+    blocks = [(defects, 0.0, 0.0), (path + ca.DM(program.margins.path), -np.inf, 0.0), (epigraph, -np.inf, 0.0),
               (A @ z - lin.b, 0.0, 0.0), (G @ z - lin.h, -np.inf, 0.0)]
+    cones = program.evaluate(np.zeros(program.num_variables)).cones
+    for cone in cones:  # ||v_1:|| <= v_0 as v_1:.v_1: - v_0^2 <= 0 and v_0 >= 0 (smooth for IPOPT)
+        values = ca.DM(sp.csr_matrix(cone.jacobian).toarray()) @ z + ca.DM(cone.values)
+        start = 0
+        for size in cone.sizes:
+            head, rest = values[start], values[start + 1: start + size]
+            blocks += [(ca.dot(rest, rest) - head**2, -np.inf, 0.0), (-head, -np.inf, 0.0)]
+            start += size
     g = ca.vertcat(*(b[0] for b in blocks))
     lbg = np.concatenate([np.full(b[0].shape[0], b[1]) for b in blocks])
     ubg = np.concatenate([np.full(b[0].shape[0], b[2]) for b in blocks])

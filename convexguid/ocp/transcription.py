@@ -4,23 +4,26 @@ bounds and boundary values, the objectives, the repair margins, and the engine's
 
 Decision vector ``z = [x_0 .. x_N, v_1 .. v_C, (s), (J), (t_f)]``: the states at the :math:`N + 1` nodes, the
 transcription's control values (Hermite-Simpson: nodes then interval midpoints; zero-order hold: one per interval;
-first-order hold: one per node), for minimum fuel the slacks :math:`s \\ge |v|` of every control value (and with a
-free final time the fuel's epigraph variable :math:`J`), and the final time when it is free. A subclass says how
+first-order hold: one per node), for minimum fuel the slacks :math:`s \\ge |v|` of every control value's entries
+(1-norm) or :math:`s \\ge \\|v\\|` of every control value (2-norm, a second-order cone), the objective's epigraph
+variable :math:`J` when the objective is not linear in ``z`` (fuel with a free final time, a nonlinear terminal
+cost), and the final time when it is free. A subclass says how
 the control values make the control between nodes and writes the dynamics defects of each interval
 (:mod:`convexguid.ocp.hermite_simpson`, :mod:`convexguid.ocp.hold`).
 
 Boundary values and bounds are the hard linear constraints :math:`Az = b`, :math:`Gz \\le h`; path constraints
-hold where the transcription imposes them, less the margin a dense-check repair may have added there
-(:class:`Margins`). With step :math:`h = t_f/N` and the transcription's quadrature weights :math:`w_j` per unit
+hold where the transcription imposes them and cone constraints at the nodes (kept exact: second-order cones on
+affine maps of ``z``), each less the margin a dense-check repair may have added there (:class:`Margins`). With step :math:`h = t_f/N` and the transcription's quadrature weights :math:`w_j` per unit
 step, minimum time is the linear cost :math:`t_f`, minimum energy :math:`h \\sum_j w_j v_j^2` (weighted residuals
 :math:`r = v`), minimum fuel :math:`h \\sum_j w_j s_j` with :math:`-s \\le v \\le s` linear: a linear cost when the
 final time is fixed, else :math:`\\min J` subject to :math:`h \\sum_j w_j s_j - J \\le 0` (an epigraph the engine
-linearizes like any constraint). Jacobians and the Lagrangian Hessian are CasADi's exact sparse derivatives.
+linearizes like any constraint); a terminal cost :math:`\\phi(x_N, t_f)` is a linear cost when affine, else
+:math:`\\min J` subject to :math:`\\phi - J \\le 0`. Jacobians and the Lagrangian Hessian are CasADi's exact sparse derivatives.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -28,7 +31,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
@@ -56,10 +59,12 @@ class Margins:
     bounds: np.ndarray
     violation: float = float("inf")
     """The dense check's worst violation that led to these margins (the next repair must do better)."""
+    cone: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Each stated cone's tightening at each node it holds (its bound less this), in :attr:`cone_rows` order."""
 
     @classmethod
-    def none(cls, path_rows: int, state_values: int) -> Margins:
-        return cls(np.zeros(path_rows), np.zeros(state_values))
+    def none(cls, path_rows: int, state_values: int, cone_rows: int = 0) -> Margins:
+        return cls(np.zeros(path_rows), np.zeros(state_values), cone=np.zeros(cone_rows))
 
 
 @dataclass(frozen=True)
@@ -92,14 +97,18 @@ class Transcription:
         self.nx, self.nu = len(problem.states), len(problem.controls)
         self.free_time = problem.free_time
         self.fuel = problem.objective == "fuel"
+        self.fuel_norm = problem.fuel_norm if self.fuel else 0
         self.control_start = (self.N + 1) * self.nx
         self.num_control_values = self.control_values_per_axis() * self.nu
         self.slack_start = self.control_start + self.num_control_values
-        self.num_slacks = self.num_control_values if self.fuel else 0
-        self.epigraph = self.fuel and self.free_time
+        self.slacks_per_value = self.nu if self.fuel_norm == 1 else 1
+        self.num_slacks = self.control_values_per_axis() * self.slacks_per_value if self.fuel else 0
+        self.epigraph = (self.fuel and self.free_time) or (problem.objective == "terminal"
+                                                          and not _affine_with_no_offset(self, problem))
         self.num_variables = self.slack_start + self.num_slacks + int(self.epigraph) + int(self.free_time)
         self._build()
-        self.margins = margins if margins is not None else Margins.none(self.num_path, (self.N + 1) * self.nx)
+        self.margins = margins if margins is not None else Margins.none(self.num_path, (self.N + 1) * self.nx,
+                                                                        len(self.cone_rows))
 
     # --- what a subclass says ---------------------------------------------------------------------------------
     def control_values_per_axis(self) -> int:
@@ -153,10 +162,12 @@ class Transcription:
         values' magnitudes, the epigraph at their integral)."""
         parts = [np.ravel(states), np.ravel(values)]
         if self.fuel:
-            slacks = np.abs(np.ravel(values))
+            slacks = np.abs(np.ravel(values)) if self.fuel_norm == 1 else np.linalg.norm(values, axis=1)
             parts.append(slacks)
             if self.epigraph:
-                parts.append([tf / self.N * float(self._weights_per_step @ slacks)])
+                parts.append([tf / self.N * float(self._slack_weights @ slacks)])
+        elif self.epigraph:  # a nonlinear terminal cost: J at its value
+            parts.append([float(self._terminal_value(states[-1], tf))])
         if self.free_time:
             parts.append([tf])
         return np.concatenate(parts)
@@ -177,35 +188,82 @@ class Transcription:
         self.state_scale = ca.DM([v.scale for v in p.states])
         g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
         self.path_rows: list[tuple[str, int, int]] = []  # (node or mid, index, constraint) of each path row
-        constraints = []
+        self.cone_rows: list[tuple[str, int, int]] = []  # the same for each stated cone where it holds
+        constraints, cones = [], []
+        cone_maps = {j: ca.Function(f"cone_{j}", [x, u], [ca.vertcat(*c.cone)]) for j, c in enumerate(p.constraints)
+                     if c.cone is not None}
 
         def imposed(kind: str, k: int, share: float, state, control, time) -> None:
             for j, c in enumerate(p.constraints):
-                if c.applies(share, kind == "node"):
+                if not c.applies(share, kind == "node"):
+                    continue
+                if c.cone is None:
                     self.path_rows.append((kind, k, j))
                     constraints.append(g[j](state, control, time))
+                elif kind == "node":  # a cone is affine in the node's values only
+                    self.cone_rows.append((kind, k, j))
+                    cones.append(cone_maps[j](state, control))
 
         defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         self.num_path = path.shape[0]
-        fuel = (tf / N * ca.dot(ca.DM(self._weights_per_step), z[self.slack_start: self.slack_start + self.num_slacks])
-                - z[self.slack_start + self.num_slacks]) if self.epigraph else ca.SX(0, 1)
-        self._symbols = (z, defect, path, fuel)
+        self._build_cones(z, V, cones)
+        objective = self._epigraph(z, X[:, N], tf) if self.epigraph else ca.SX(0, 1)
+        self._symbols = (z, defect, path, objective)
         self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
         self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
-        self._fuel = ca.Function("fuel", [z], [fuel, ca.jacobian(fuel, z)])
+        self._objective_epigraph = ca.Function("epigraph", [z], [objective, ca.jacobian(objective, z)])
         self._defect_pattern = _Pattern(ca.jacobian(defect, z).sparsity())
         self._path_pattern = _Pattern(ca.jacobian(path, z).sparsity())
-        self._fuel_pattern = _Pattern(ca.jacobian(fuel, z).sparsity())
+        self._epigraph_pattern = _Pattern(ca.jacobian(objective, z).sparsity())
+
+    def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
+        """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value: one
+        affine map ``W z + w`` (constant ``W``), in :class:`~convexguid.scp.problem.ConeBlock` order."""
+        parts = list(stated)
+        if self.fuel_norm == 2:
+            slacks = z[self.slack_start: self.slack_start + self.num_slacks]
+            parts += [ca.vertcat(slacks[j], V[:, j]) for j in range(self.num_slacks)]
+        self.cone_sizes = tuple(part.shape[0] for part in parts)
+        if not parts:
+            self._cone_map = None
+            return
+        stacked = ca.vertcat(*parts)
+        jacobian = ca.jacobian(stacked, z)
+        constant = ca.Function("cone_map", [z], [jacobian, stacked])(np.zeros(self.num_variables))
+        self._cone_map = (_Pattern(jacobian.sparsity()).coo(constant[0]).tocsr(), np.asarray(constant[1]).ravel())
+        firsts = np.concatenate([[0], np.cumsum(self.cone_sizes)[:-1]]).astype(int)
+        self._cone_first_rows = firsts[: len(stated)]
+
+    def _epigraph(self, z: ca.SX, final_state: ca.SX, tf) -> ca.SX:
+        """The objective less its epigraph variable ``J`` (``<= 0``): the fuel with a free final time, or a
+        nonlinear terminal cost."""
+        J = z[self.slack_start + self.num_slacks]
+        if self.fuel:
+            slacks = z[self.slack_start: self.slack_start + self.num_slacks]
+            return tf / self.N * ca.dot(ca.DM(self._slack_weights), slacks) - J
+        return self._terminal_function(final_state, tf) - J
+
+    @cached_property
+    def _terminal_function(self) -> ca.Function:
+        p = self.problem
+        return ca.Function("terminal", [p.state_vector(), p.time], [p.terminal])
+
+    def _terminal_value(self, final_state: np.ndarray, tf: float) -> float:
+        return float(self._terminal_function(final_state, tf))
+
+    @cached_property
+    def _slack_weights(self) -> np.ndarray:
+        return np.repeat(self.per_step_weights(), self.slacks_per_value)
 
     @cached_property
     def _hessian(self) -> tuple[ca.Function, _Pattern]:
         """The exact Lagrangian Hessian and its pattern, built when the engine's end game first asks for it."""
-        z, defect, path, fuel = self._symbols
-        lam, mu, nu = (ca.SX.sym(name, e.shape[0]) for name, e in (("lam", defect), ("mu", path), ("nu", fuel)))
+        z, defect, path, epigraph = self._symbols
+        lam, mu, nu = (ca.SX.sym(name, e.shape[0]) for name, e in (("lam", defect), ("mu", path), ("nu", epigraph)))
         lagrangian = ca.dot(lam, defect) + (ca.dot(mu, path) if path.shape[0] else 0)
-        if fuel.shape[0]:
-            lagrangian = lagrangian + ca.dot(nu, fuel)
+        if epigraph.shape[0]:
+            lagrangian = lagrangian + ca.dot(nu, epigraph)
         hessian = ca.hessian(lagrangian, z)[0]
         return ca.Function("hessian", [z, lam, mu, nu], [hessian]), _Pattern(hessian.sparsity())
 
@@ -232,9 +290,11 @@ class Transcription:
         per_axis = self.control_values_per_axis()
         parts = [np.tile(states, N + 1), np.tile(controls, per_axis)]
         if self.fuel:
-            parts.append(np.tile(controls, per_axis))
-            if self.epigraph:
-                parts.append([max(self.problem.tf_guess * float(controls.sum()), 1e-6)])
+            parts.append(np.tile(controls, per_axis) if self.fuel_norm == 1
+                         else np.full(per_axis, float(np.linalg.norm(controls))))
+        if self.epigraph:
+            horizon = self.problem.tf_guess if self.free_time else self.problem.tf
+            parts.append([max(horizon * float(controls.sum()), 1e-6) if self.fuel else _terminal_scale(self)])
         if self.free_time:
             parts.append([max(self.problem.tf_guess, 1e-6)])
         return np.concatenate(parts)
@@ -259,7 +319,9 @@ class Transcription:
             cost[self.slack_start + self.num_slacks] = 1.0
         elif self.fuel:
             cost[self.slack_start: self.slack_start + self.num_slacks] = self.problem.tf / self.N * \
-                self._weights_per_step
+                self._slack_weights
+        elif self.problem.objective == "terminal":
+            cost += _terminal_gradient(self)
         return cost
 
     def linear_constraints(self) -> LinearConstraints:
@@ -276,7 +338,7 @@ class Transcription:
         blocks = [sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
                   sp.coo_matrix((-np.ones(lower.size), (np.arange(lower.size), lower)), shape=(lower.size, n))]
         blocks += self._interpolated_control_bounds()
-        if self.fuel:
+        if self.fuel_norm == 1:
             # -s <= v <= s for every control value: v - s <= 0 and -v - s <= 0
             controls = np.arange(self.control_start, self.slack_start)
             slacks = np.arange(self.slack_start, self.slack_start + self.num_slacks)
@@ -289,7 +351,8 @@ class Transcription:
         # a repaired state bound holds with its margin at the nodes next to where the dense check saw it broken
         tightened = np.concatenate([self.margins.bounds, np.zeros(n - self.margins.bounds.size)])
         h = np.concatenate([high[upper] - tightened[upper], -low[lower] - tightened[lower],
-                            self._interpolated_control_limits(), np.zeros(2 * self.num_slacks)])
+                            self._interpolated_control_limits(),
+                            np.zeros(2 * self.num_slacks if self.fuel_norm == 1 else 0)])
         return LinearConstraints(A, np.array(values, dtype=float), G.tocoo(), h)
 
     def _interpolated_control_bounds(self) -> list[sp.coo_matrix]:
@@ -325,9 +388,8 @@ class Transcription:
         per_axis = self.control_values_per_axis()
         low = [np.tile(xl, N + 1), np.tile(ul, per_axis)]
         high = [np.tile(xh, N + 1), np.tile(uh, per_axis)]
-        if self.fuel:
-            low += [np.zeros(self.num_slacks), np.full(int(self.epigraph), -np.inf)]
-            high += [np.full(self.num_slacks, np.inf), np.full(int(self.epigraph), np.inf)]
+        low += [np.zeros(self.num_slacks), np.full(int(self.epigraph), -np.inf)]
+        high += [np.full(self.num_slacks, np.inf), np.full(int(self.epigraph), np.inf)]
         if self.free_time:
             low.append([p.tf_bounds[0]])
             high.append([p.tf_bounds[1]])
@@ -353,10 +415,16 @@ class Transcription:
             inequalities = (ConstraintBlock("path_constraints", values,
                                             self._path_pattern.coo(path_jac) if jacobians else None),)
         if self.epigraph:
-            fuel, fuel_jac = self._fuel(z)
-            inequalities += (ConstraintBlock("fuel_epigraph", np.asarray(fuel, dtype=float).ravel(),
-                                             self._fuel_pattern.coo(fuel_jac) if jacobians else None),)
-        return Evaluation(residuals, residual_jacobian, inequalities, equalities)
+            value, jacobian = self._objective_epigraph(z)
+            inequalities += (ConstraintBlock("objective_epigraph", np.asarray(value, dtype=float).ravel(),
+                                             self._epigraph_pattern.coo(jacobian) if jacobians else None),)
+        cones = ()
+        if self._cone_map is not None:
+            W, offset = self._cone_map
+            values = W @ z + offset
+            values[self._cone_first_rows] -= self.margins.cone
+            cones = (ConeBlock("cone_constraints", values, W.tocoo() if jacobians else None, self.cone_sizes),)
+        return Evaluation(residuals, residual_jacobian, inequalities, equalities, cones)
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
         """CasADi's exact :math:`\\sum \\lambda_k \\nabla^2 e_k + \\sum \\mu_j \\nabla^2 g_j` (the energy residuals are
@@ -373,3 +441,36 @@ def _control_guess(v) -> float:
     if v.lower is not None and v.upper is not None:
         return 0.5 * (v.lower + v.upper)
     return 0.0
+
+
+def _terminal_symbols(program: Transcription) -> tuple[ca.SX, ca.SX]:
+    """The terminal cost as an expression of ``z`` (the final node's states and the final time), and ``z``."""
+    z = ca.SX.sym("z", program.num_variables)
+    final_state = z[program.control_start - program.nx: program.control_start]
+    tf = z[-1] if program.free_time else program.problem.tf
+    return program._terminal_function(final_state, tf), z
+
+
+def _affine_with_no_offset(program: Transcription, problem: Problem) -> bool:
+    """Whether the terminal cost is ``c^T z`` exactly (then a linear cost; else an epigraph). Called before the
+    layout is final: it lays the final node and the final time out as the full layout will."""
+    state, time = problem.state_vector(), problem.time
+    expression = problem.terminal
+    variables = ca.vertcat(state, time)
+    jacobian = ca.jacobian(expression, variables)
+    offset = ca.substitute(expression, variables, ca.DM.zeros(variables.shape[0]))
+    return (not ca.depends_on(jacobian, variables) and float(ca.evalf(offset)) == 0.0
+            and (program.free_time or not ca.depends_on(expression, time)))
+
+
+def _terminal_gradient(program: Transcription) -> np.ndarray:
+    expression, z = _terminal_symbols(program)
+    return np.asarray(ca.evalf(ca.substitute(ca.jacobian(expression, z), z, ca.DM.zeros(z.shape[0])))).ravel()
+
+
+def _terminal_scale(program: Transcription) -> float:
+    """A magnitude for the terminal cost's epigraph variable: its size at the guess's final state."""
+    p = program.problem
+    final = np.array([v.final if v.final is not None else (v.initial or 0.0) for v in p.states])
+    tf = p.tf_guess if program.free_time else p.tf
+    return max(abs(program._terminal_value(final, tf)), 1e-6)

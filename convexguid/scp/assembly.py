@@ -1,9 +1,10 @@
 """Assembly of the convex subproblem with a sparsity pattern fixed once.
 
-Subproblem variables are ``z = [d, y, s_o, s_g, t]``: the step ``d`` from the
+Subproblem variables are ``z = [d, y, s_o, s_g, t, s_c]``: the step ``d`` from the
 iterate ``x``, the lifted residuals ``y`` (linearized :math:`r`), and nonnegative
-slacks on the output constraints, on the linearized inequalities and around the
-linearized equalities (an exact l1 penalty, so every subproblem is feasible):
+slacks on the output constraints, on the linearized inequalities, around the
+linearized equalities and on each second-order cone (an exact l1 penalty, so every
+subproblem is feasible):
 
 .. math::
 
@@ -13,9 +14,11 @@ linearized equalities (an exact l1 penalty, so every subproblem is feasible):
     M y - s_o \\le m,
 
     g + \\nabla g\\, d \\le s_g,\\quad |e + \\nabla e\\, d| \\le t,\\quad
-    s_o, s_g, t \\ge 0,\\quad |d_i| \\le \\Delta\\,\\sigma_i
+    \\|v_{1:} + F_{1:} d\\| \\le v_0 + F_0 d + s_c,\\quad
+    s_o, s_g, t, s_c \\ge 0,\\quad |d_i| \\le \\Delta\\,\\sigma_i
 
-with :math:`\\Delta` the trust radius and :math:`\\sigma` the variable scale; the backend sees
+with :math:`\\Delta` the trust radius, :math:`\\sigma` the variable scale and :math:`v = Fx + f` each cone's
+affine map (:class:`~convexguid.scp.problem.ConeBlock`, exact: no linearization); the backend sees
 the scaled step :math:`d_i/\\sigma_i` (columns scaled), so metres and radians weigh alike. The
 Hessian is diagonal and the dense Jacobian of :math:`r` appears once, not in every
 bound row, which keeps the KKT factorisation cheap. :class:`SubproblemAssembler`
@@ -47,6 +50,10 @@ class _Pattern:
         r, c = np.meshgrid(np.arange(nrows), np.arange(ncols), indexing="ij")
         self._rows.append(row0 + r.ravel())
         self._cols.append(col0 + c.ravel())
+
+    def add_entries(self, rows: np.ndarray, cols: np.ndarray) -> None:
+        self._rows.append(np.asarray(rows, dtype=int))
+        self._cols.append(np.asarray(cols, dtype=int))
 
     def add_diagonal(self, row0: int, col0: int, size: int) -> None:
         self._rows.append(row0 + np.arange(size))
@@ -88,12 +95,15 @@ class SubproblemAssembler:
         self.linear_cost, self.weights = linear_cost, weights
         self.n_ineq = sum(b.values.size for b in first.inequalities)
         self.n_eq = sum(b.values.size for b in first.equalities)
+        cone_sizes = tuple(size for block in first.cones for size in block.sizes)
+        self.n_cones, n_cone_rows = len(cone_sizes), sum(cone_sizes)
         n_a, n_g, n_o = linear.A.shape[0], linear.G.shape[0], outputs.M.shape[0]
-        self.n_slack = n_o + self.n_ineq + self.n_eq
+        self.n_slack = n_o + self.n_ineq + self.n_eq + self.n_cones
         self.num_z = n + self.m + self.n_slack
         y0, so0, sg0, t0 = n, n + self.m, n + self.m + n_o, n + self.m + n_o + self.n_ineq
-        self.cones = Cones(zero=n_a + self.m, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n)
-        self.layout = DualLayout(n_a, self.m, n_g, n_o, self.n_ineq, self.n_eq)
+        self.cones = Cones(zero=n_a + self.m, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n,
+                           soc=cone_sizes)
+        self.layout = DualLayout(n_a, self.m, n_g, n_o, self.n_ineq, self.n_eq, n_cone_rows)
         pat = _Pattern((self.cones.rows, self.num_z))
         # zero cone: A d = b - A x ; J d - y = -r
         _add_jacobian(pat, 0, linear.A, n_a, n)
@@ -106,7 +116,14 @@ class SubproblemAssembler:
         pat.add_sparse(row, y0, outputs.M)
         pat.add_diagonal(row, so0, n_o)
         row += n_o
-        add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
+        row = add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
+        # second-order cones: v + F d with the cone's slack on its first row
+        for block in first.cones:
+            pat.add_sparse(row, 0, block.jacobian)
+            row += block.values.size
+        firsts = np.concatenate([[0], np.cumsum(cone_sizes)[:-1]]).astype(int) if cone_sizes else np.zeros(0, int)
+        self._cone_first_rows = firsts
+        pat.add_entries(row - n_cone_rows + firsts, t0 + self.n_eq + np.arange(self.n_cones))
         pat.finish()
         self._a_pattern = pat
         self._m_data = sp.coo_matrix(outputs.M).data
@@ -135,14 +152,15 @@ class SubproblemAssembler:
                     _jacobian_data(lin.G),
                     self._m_data, -np.ones(n_o), *jac_g, -np.ones(self.n_ineq),
                     *jac_e, -np.ones(self.n_eq), *neg_e, -np.ones(self.n_eq),
-                    -np.ones(self.n_slack), 1.0 / self.scale, -1.0 / self.scale]
+                    -np.ones(self.n_slack), 1.0 / self.scale, -1.0 / self.scale,
+                    *(-_jacobian_data(b.jacobian) for b in ev.cones), -np.ones(self.n_cones)]
         A = self._a_pattern.matrix(a_blocks)
         A.data *= self._a_data_scale
         room = lin.h - lin.G @ x
         # a hard inequality the iterate meets only to the backend's tolerance must not make d = 0 infeasible
         room[(room < 0) & (room > -1e-7 * (1 + np.abs(lin.h)))] = 0.0
         b = np.concatenate([lin.b - lin.A @ x, -ev.residuals, room, self.outputs.m,
-                            -g, -e, e, np.zeros(self.n_slack), np.full(2 * n, radius)])
+                            -g, -e, e, np.zeros(self.n_slack), np.full(2 * n, radius), _values(ev.cones)])
         p_data = self._p_residual
         if self.curvature:
             h = np.zeros(n) if hessian_diagonal is None else hessian_diagonal
@@ -170,7 +188,8 @@ class DualLayout:
     Zero cone: ``A`` (``linear_equalities`` rows), then the lifted form's ``J d - y = -r`` rows
     (``residuals``; none in the condensed form). Nonnegative cone: ``G``, the output constraints, the
     linearized inequalities, the linearized equalities as ``+`` and ``-`` rows, then slacks and trust region.
-    The equality multiplier is the ``+`` row's dual less the ``-`` row's.
+    The equality multiplier is the ``+`` row's dual less the ``-`` row's. Second-order cones: the last
+    ``cone_rows`` rows.
     """
 
     linear_equalities: int
@@ -179,24 +198,26 @@ class DualLayout:
     outputs: int
     inequalities: int
     equalities: int
+    cone_rows: int = 0
 
     def multipliers(self, z: np.ndarray) -> Multipliers:
         sizes = [self.linear_equalities, self.residuals, self.linear_inequalities, self.outputs, self.inequalities,
                  self.equalities, self.equalities]
         ends = np.cumsum(sizes)
         a, _, g, o, i, plus, minus = (z[end - size: end] for end, size in zip(ends, sizes, strict=True))
+        cone = z[z.size - self.cone_rows:].copy() if self.cone_rows else np.zeros(0)
         return Multipliers(equality=plus - minus, inequality=i.copy(), output=o.copy(), linear_equality=a.copy(),
-                           linear_inequality=g.copy())
+                           linear_inequality=g.copy(), cone=cone)
 
 
 def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
-                      counts: tuple[int, int, int]) -> None:
+                      counts: tuple[int, int, int]) -> int:
     """The rows after the output constraints, shared by the lifted and the condensed subproblem.
 
     In order: the linearized inequalities with their slacks, the linearized equalities twice (``+`` and ``-``)
     with theirs, the nonnegativity of every slack, and the trust region on the step's ``n`` columns.
     ``starts`` are the first columns of the output, inequality and equality slacks; ``counts`` the numbers
-    of inequality rows, equality rows and slacks.
+    of inequality rows, equality rows and slacks. Returns the next row.
     """
     so0, sg0, t0 = starts
     n_ineq, n_eq, n_slack = counts
@@ -213,6 +234,7 @@ def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts
     row += n_slack
     pat.add_diagonal(row, 0, n)
     pat.add_diagonal(row + n, 0, n)
+    return row + 2 * n
 
 
 def _add_jacobian(pat: _Pattern, row0: int, jacobian: np.ndarray | sp.spmatrix | None, rows: int, n: int) -> None:

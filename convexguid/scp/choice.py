@@ -14,8 +14,8 @@ evaluation:
   ``optimal`` is solved again by Clarabel;
 * otherwise the lifted subproblem with Clarabel.
 
-(SCP subproblems have no second-order cones; a conic program that has them goes to Clarabel,
-:func:`~convexguid.backends.registry.auto_backend`.) An explicit name keeps today's behaviour:
+A program with second-order cones (:class:`~convexguid.scp.problem.ConeBlock`) always gets the lifted
+subproblem, with Clarabel under ``auto``; a backend that cannot take cones says so when it is set up. An explicit name keeps today's behaviour:
 the lifted subproblem for ``clarabel``, ``osqp`` and ``qpsolvers:*``, the condensed one for the
 dense backend ``daqp``.
 """
@@ -57,7 +57,9 @@ def jacobian_density(first: Evaluation) -> float:
 def choose_subproblem(name: str, n: int, first: Evaluation, weights: np.ndarray) -> SubproblemChoice:
     """The assembly and backend for backend setting ``name`` on a program with ``n`` variables."""
     if name != AUTO:
-        return SubproblemChoice(name, is_dense_backend(name), name)
+        return SubproblemChoice(name, is_dense_backend(name) and not first.cones, name)
+    if first.cones:  # second-order cones: the conic interior-point solver
+        return SubproblemChoice("clarabel", False, f"{AUTO} -> clarabel (sparse, cones)")
     dense = ("daqp" in native_backends() and n <= DENSE_MAX_VARIABLES and bool(np.any(np.asarray(weights) > 0))
              and first.residuals.size > 0 and jacobian_density(first) >= DENSE_MIN_DENSITY)
     if dense:

@@ -53,6 +53,8 @@ class CondensedAssembler:
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray, curvature: bool = False) -> None:
+        if first.cones:
+            raise ValueError("the condensed subproblem has no second-order cones; use the lifted one")
         self.n, self.m = n, first.residuals.size
         linear = linear.sparse()
         self.linear, self.outputs, self.scale = linear, outputs, scale

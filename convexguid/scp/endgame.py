@@ -208,4 +208,6 @@ def linearized_violation(raw: Evaluation, outputs: OutputConstraints, d: np.ndar
         total += float(np.maximum(block.values + block.jacobian @ d, 0.0).sum())
     for block in raw.equalities:
         total += float(np.abs(block.values + block.jacobian @ d).sum())
+    for cone in raw.cones:  # affine: its value after the step is exact
+        total += float(cone.violations(cone.values + cone.jacobian @ d).sum())
     return total

@@ -149,10 +149,12 @@ class SCPAlgorithm:
 
     # --- evaluation -------------------------------------------------------------------------
     def _evaluate(self, state: IterationState | None, x: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
-        """The program's own evaluation, and one that also lists the output constraints' values."""
+        """The program's own evaluation, and one that also lists the output constraints' values and the cones'
+        violations (what the merit function and the reports count)."""
         t = time.perf_counter()
         raw = self.program.evaluate(x, jacobians)
-        ev = replace(raw, inequalities=self.outputs.blocks_at(raw.residuals) + raw.inequalities)
+        ev = replace(raw, inequalities=self.outputs.blocks_at(raw.residuals) + raw.inequalities
+                     + tuple(cone.as_inequality() for cone in raw.cones))
         if state is not None:
             state.convexify_time_s += time.perf_counter() - t
         return raw, ev

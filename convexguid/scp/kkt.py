@@ -6,16 +6,18 @@ stops on the Karush-Kuhn-Tucker conditions of
 .. math::
 
     \\min_x f(x) = r^T W r + c^T x \\quad\\text{s.t.}\\quad Ax = b,\\; Gx \\le h,\\; M r(x) \\le m,\\;
-    g(x) \\le 0,\\; e(x) = 0
+    g(x) \\le 0,\\; e(x) = 0,\\; F_i x + f_i \\in \\mathcal Q_i
 
 at the iterate, with the multipliers of the last subproblem (Nocedal & Wright, *Numerical
 Optimization*, 2nd ed., Thm. 12.1, eqs. 12.34):
 
-* stationarity: :math:`\\nabla f + A^T\\lambda_A + G^T\\mu_G + J_r^T M^T \\nu + J_g^T \\mu + J_e^T \\lambda = 0`,
+* stationarity: :math:`\\nabla f + A^T\\lambda_A + G^T\\mu_G + J_r^T M^T \\nu + J_g^T \\mu + J_e^T \\lambda
+  - \\sum_i F_i^T y_i = 0` (:math:`y_i \\in \\mathcal Q_i`, the cones' duals),
   measured per variable scale :math:`\\sigma_i` (what the objective would change if the variable moved
   by its own typical size), in the objective's units;
 * feasibility: the worst violation of any constraint, in that constraint's own unit;
-* complementarity: :math:`\\max_j |\\mu_j g_j(x)|` over every inequality, in the objective's units.
+* complementarity: :math:`\\max_j |\\mu_j g_j(x)|` over every inequality and :math:`|y_i^T (F_i x + f_i)|` over
+  every cone, in the objective's units.
 
 Stationarity and complementarity are judged relative to :math:`\\max(|f(x)|, 10^{-3}|f(x_0)|)`: a
 minimum time is measured in seconds, an energy in its own units, whatever their size.
@@ -74,6 +76,8 @@ def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, w
         gradient = gradient + A.T @ multipliers.linear_equality
     if G.shape[0]:
         gradient = gradient + G.T @ multipliers.linear_inequality
+    for block, duals in _cone_duals(raw, multipliers):
+        gradient = gradient - block.jacobian.T @ duals  # the cone v(x) in Q: -F^T y, y in Q
     stationarity = float(np.max(np.abs(gradient * scale), initial=0.0))
     products = [np.zeros(0)]
     if G.shape[0]:
@@ -85,6 +89,19 @@ def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, w
         size = block.values.size
         products.append(multipliers.inequality[start: start + size] * block.values)
         start += size
+    for block, duals in _cone_duals(raw, multipliers):
+        ends = np.cumsum(block.sizes)
+        products.append(np.array([duals[end - size: end] @ block.values[end - size: end]
+                                  for end, size in zip(ends, block.sizes, strict=True)]))
     complementarity = float(np.max(np.abs(np.concatenate(products)), initial=0.0))
     unit = max(abs(objective), 1e-3 * abs(objective_at_start), 1e-12)
     return KKTResiduals(stationarity, feasibility, complementarity, unit)
+
+
+def _cone_duals(raw: Evaluation, multipliers: Multipliers):
+    """Each cone block with its rows' duals."""
+    start = 0
+    for block in raw.cones:
+        size = block.values.size
+        yield block, multipliers.cone[start: start + size]
+        start += size

@@ -37,7 +37,7 @@ converged point is fixed by the KKT conditions, not by the Hessian.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -62,7 +62,8 @@ class Multipliers:
     ``equality`` (:math:`\\lambda`, free) and ``inequality`` (:math:`\\mu \\ge 0`) belong to the
     program's own nonlinear blocks in their order; ``output`` (:math:`\\nu \\ge 0`) to the output
     constraints :math:`M r \\le m`; ``linear_equality`` and ``linear_inequality`` to :math:`Ax = b` and
-    :math:`Gx \\le h`. Each is in the objective's units per unit of its constraint.
+    :math:`Gx \\le h`; ``cone`` (each in its second-order cone) to the program's cones, row by row. Each is in
+    the objective's units per unit of its constraint.
     """
 
     equality: np.ndarray
@@ -70,10 +71,11 @@ class Multipliers:
     output: np.ndarray
     linear_equality: np.ndarray
     linear_inequality: np.ndarray
+    cone: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def largest(self) -> float:
-        """The largest multiplier of a nonlinear or output constraint, in absolute value (at least 1e-12)."""
-        return max(float(np.max(np.abs(np.concatenate([self.equality, self.inequality, self.output])),
+        """The largest multiplier of a nonlinear, output or cone constraint, in absolute value (at least 1e-12)."""
+        return max(float(np.max(np.abs(np.concatenate([self.equality, self.inequality, self.output, self.cone])),
                                 initial=0.0)), 1e-12)
 
     def residual_weights(self, residuals: np.ndarray, weights: np.ndarray, outputs_M: sp.spmatrix) -> np.ndarray:

@@ -5,11 +5,13 @@ The engine solves
 .. math::
 
     \\min_x\\; \\sum_i w_i\\, r_i(x)^2 + c^T x
-    \\quad\\text{s.t.}\\quad A x = b,\\; G x \\le h,\\; g(x) \\le 0,\\; e(x) = 0,
+    \\quad\\text{s.t.}\\quad A x = b,\\; G x \\le h,\\; g(x) \\le 0,\\; e(x) = 0,\\;
+    F_i x + f_i \\in \\mathcal{Q}_i,
 
 where :math:`r` (least-squares residuals, e.g. torques), :math:`g` and :math:`e` are
 nonlinear and are linearized about the current iterate each iteration, while
-:math:`A, b, G, h, c` are constant. Bounds that are linear in the residuals
+:math:`A, b, G, h, c` are constant and the second-order cones :math:`\\mathcal Q_i` on affine maps
+(:class:`ConeBlock`: a thrust magnitude, an approach cone) stay exact. Bounds that are linear in the residuals
 (:class:`OutputConstraints`, e.g. :math:`|u_i| \\le u_{max}` at nodes and interpolated
 points) stay sparse: the engine lifts :math:`y = r(x)` into the subproblem and bounds
 :math:`y`, instead of copying the dense Jacobian of :math:`r` into every bound row.
@@ -42,6 +44,33 @@ class ConstraintBlock:
 
 
 @dataclass(frozen=True)
+class ConeBlock:
+    """Second-order cones kept exact in every subproblem: :math:`\\|v_{1:}\\| \\le v_0` for each cone's part
+    :math:`v` of ``values``, an affine map of the variables (its constant ``jacobian`` a ``scipy.sparse.coo_matrix``
+    of the same entries at every evaluation). ``sizes`` lists each cone's length, in order; ``unit`` is that of
+    :math:`v_0`. The subproblem keeps the cone itself, softened only by one penalized slack per cone on
+    :math:`v_0` (an exact penalty, so every subproblem is feasible)."""
+
+    name: str
+    values: np.ndarray
+    jacobian: sp.coo_matrix | None
+    sizes: tuple[int, ...]
+    unit: str = ""
+
+    def violations(self, values: np.ndarray | None = None) -> np.ndarray:
+        """How far each cone is broken, :math:`\\max(0, \\|v_{1:}\\| - v_0)` (of ``values``, default its own)."""
+        values = self.values if values is None else values
+        ends = np.cumsum(self.sizes)
+        return np.array([max(float(np.linalg.norm(values[end - size + 1: end])) - float(values[end - size]), 0.0)
+                         for end, size in zip(ends, self.sizes, strict=True)])
+
+    def as_inequality(self) -> ConstraintBlock:
+        """The cones' violations as an inequality block (no Jacobian): what the merit function and the reports
+        count."""
+        return ConstraintBlock(self.name, self.violations(), None, self.unit)
+
+
+@dataclass(frozen=True)
 class Evaluation:
     """Nonlinear maps of a :class:`NonconvexProgram` at one point (Jacobians optional)."""
 
@@ -49,6 +78,7 @@ class Evaluation:
     residual_jacobian: np.ndarray | None = None
     inequalities: tuple[ConstraintBlock, ...] = ()
     equalities: tuple[ConstraintBlock, ...] = ()
+    cones: tuple[ConeBlock, ...] = ()
 
 
 @dataclass(frozen=True)
