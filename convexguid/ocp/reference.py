@@ -24,7 +24,7 @@ class IpoptAnswer:
 
 def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: float = 1e-10) -> IpoptAnswer:
     """Minimise the program's objective (linear cost plus weighted squared residuals) subject to its defects, path
-    constraints (with their margins), cones (squared), objective epigraph and linear constraints, from ``z0``
+    constraints (with their margins), cones, objective epigraph and linear constraints, from ``z0``
     (default: its guess)."""
     z = ca.SX.sym("z", program.num_variables)
     objective = ca.dot(ca.DM(program.linear_cost()), z)
@@ -40,7 +40,9 @@ def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: 
     blocks = [(defects, 0.0, 0.0), (path + ca.DM(program.margins.path), -np.inf, 0.0), (epigraph, -np.inf, 0.0),
               (A @ z - lin.b, 0.0, 0.0), (G @ z - lin.h, -np.inf, 0.0)]
     cones = program.evaluate(np.zeros(program.num_variables)).cones
-    for cone in cones:  # ||v_1:|| <= v_0 as v_1:.v_1: - v_0^2 <= 0 and v_0 >= 0 (smooth for IPOPT)
+    for cone in cones:
+        # ||v_1:|| <= v_0 as v_1:.v_1: - v_0^2 <= 0 and v_0 >= 0, smooth for IPOPT (its feasibility tolerance then
+        # lets a vector near zero, a coasting thrust, through by the square root of that tolerance)
         values = ca.DM(sp.csr_matrix(cone.jacobian).toarray()) @ z + ca.DM(cone.values)
         start = 0
         for size in cone.sizes:
@@ -51,7 +53,8 @@ def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: 
     lbg = np.concatenate([np.full(b[0].shape[0], b[1]) for b in blocks])
     ubg = np.concatenate([np.full(b[0].shape[0], b[2]) for b in blocks])
     solver = ca.nlpsol("ipopt", "ipopt", {"x": z, "f": objective, "g": g},
-                       {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tol})
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tol,
+                        "ipopt.constr_viol_tol": 1e-9})
     result = solver(x0=program.initial_guess() if z0 is None else z0, lbg=lbg, ubg=ubg)
     stats = solver.stats()
     return IpoptAnswer(bool(stats["success"]), float(result["f"]), np.asarray(result["x"]).ravel(),

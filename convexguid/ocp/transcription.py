@@ -11,14 +11,15 @@ cost), and the final time when it is free. A subclass says how
 the control values make the control between nodes and writes the dynamics defects of each interval
 (:mod:`convexguid.ocp.hermite_simpson`, :mod:`convexguid.ocp.hold`).
 
-Boundary values and bounds are the hard linear constraints :math:`Az = b`, :math:`Gz \\le h`; path constraints
-hold where the transcription imposes them and cone constraints at the nodes (kept exact: second-order cones on
-affine maps of ``z``), each less the margin a dense-check repair may have added there (:class:`Margins`). With step :math:`h = t_f/N` and the transcription's quadrature weights :math:`w_j` per unit
-step, minimum time is the linear cost :math:`t_f`, minimum energy :math:`h \\sum_j w_j v_j^2` (weighted residuals
-:math:`r = v`), minimum fuel :math:`h \\sum_j w_j s_j` with :math:`-s \\le v \\le s` linear: a linear cost when the
-final time is fixed, else :math:`\\min J` subject to :math:`h \\sum_j w_j s_j - J \\le 0` (an epigraph the engine
-linearizes like any constraint); a terminal cost :math:`\\phi(x_N, t_f)` is a linear cost when affine, else
-:math:`\\min J` subject to :math:`\\phi - J \\le 0`. Jacobians and the Lagrangian Hessian are CasADi's exact sparse derivatives.
+Boundary values and bounds are the hard linear constraints :math:`Az = b`, :math:`Gz \\le h`; path constraints hold
+where the transcription imposes them and cone constraints at the nodes (kept exact: second-order cones on affine
+maps of ``z``), each less the margin a dense-check repair may have added there (:class:`Margins`). With step
+:math:`h = t_f/N` and the transcription's quadrature weights :math:`w_j` per unit step, minimum time is the linear
+cost :math:`t_f`, minimum energy :math:`h \\sum_j w_j v_j^2` (weighted residuals :math:`r = v`), minimum fuel
+:math:`h \\sum_j w_j s_j` with :math:`-s \\le v \\le s` linear: a linear cost when the final time is fixed, else
+:math:`\\min J` subject to :math:`h \\sum_j w_j s_j - J \\le 0` (an epigraph the engine linearizes like any
+constraint); a terminal cost :math:`\\phi(x_N, t_f)` is a linear cost when affine, else :math:`\\min J` subject to
+:math:`\\phi - J \\le 0`. Jacobians and the Lagrangian Hessian are CasADi's exact sparse derivatives.
 """
 
 from __future__ import annotations

@@ -14,9 +14,9 @@ evaluation:
   ``optimal`` is solved again by Clarabel;
 * otherwise the lifted subproblem with Clarabel.
 
-A program with second-order cones (:class:`~convexguid.scp.problem.ConeBlock`) always gets the lifted
-subproblem, with Clarabel under ``auto``; a backend that cannot take cones says so when it is set up. An explicit name keeps today's behaviour:
-the lifted subproblem for ``clarabel``, ``osqp`` and ``qpsolvers:*``, the condensed one for the
+A program with second-order cones (:class:`~convexguid.scp.problem.ConeBlock`) always gets the lifted subproblem,
+with Clarabel under ``auto``; a backend that cannot take cones says so when it is set up. An explicit name keeps
+today's behaviour: the lifted subproblem for ``clarabel``, ``osqp`` and ``qpsolvers:*``, the condensed one for the
 dense backend ``daqp``.
 """
 

@@ -99,9 +99,12 @@ def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, w
 
 
 def _cone_duals(raw: Evaluation, multipliers: Multipliers):
-    """Each cone block with its rows' duals."""
+    """Each cone block with its rows' duals (zero when the multipliers came from a step that saw no cone active:
+    the end game's)."""
+    rows = sum(block.values.size for block in raw.cones)
+    duals = multipliers.cone if multipliers.cone.size == rows else np.zeros(rows)
     start = 0
     for block in raw.cones:
         size = block.values.size
-        yield block, multipliers.cone[start: start + size]
+        yield block, duals[start: start + size]
         start += size
