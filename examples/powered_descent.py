@@ -13,7 +13,7 @@ linear (v' = u + g, z' = -alpha sigma), the thrust magnitude relaxes to the cone
 engine), the annulus becomes rho_1 e^-z <= sigma <= rho_2 e^-z (the engine linearizes these), the glide slope is a
 cone, and the objective is the final log-mass. At the optimum ||u|| = sigma (the relaxation is lossless): the test
 checks it on the dense re-propagation. ``build_nonconvex()`` states the original problem (thrust, mass, the
-annulus as ||T||^2 bounds) for IPOPT: tests/test_ocp_examples.py compares the two final masses.
+annulus as ||T||^2 bounds) for IPOPT: tests/test_ocp_cones.py compares the two final masses.
 Run: python examples/powered_descent.py
 """
 

@@ -8,6 +8,8 @@
 * Betts' asymmetric minimum-time slew (examples/betts_slew.py) against the published 28.6304 s.
 * A Clohessy-Wiltshire docking in an approach cone at minimum fuel with a free final time (examples/cw_docking.py):
   inside the cone, the thrust box and the speed limit on the dense re-propagation, and IPOPT's fuel on the same NLP.
+* An attitude slew with a keep-out instrument and a keep-in instrument (examples/two_instrument_slew.py) against
+  IPOPT on the same NLP.
 * A problem stated wrongly: one line naming what is wrong, before any solve.
 """
 
@@ -195,6 +197,23 @@ def test_cw_docking_inside_its_approach_cone_at_minimum_fuel_matches_ipopt():
     # the SCP's repairs tightened the cone where it broke between nodes: its fuel is at least IPOPT's on the
     # untightened NLP, and close to it
     assert answer.objective * (1 - 1e-6) <= solution.objective <= answer.objective * (1 + 1e-2)
+
+
+def test_a_slew_with_a_keep_out_and_a_keep_in_instrument_is_ipopts_optimum():
+    """examples/two_instrument_slew.py: the star tracker's Sun exclusion and the antenna's Earth inclusion both
+    reached on the dense re-propagation, and the energy IPOPT finds on the same NLP, from the SCP's plan (the same
+    local optimum) and from the straight line (no better); dearer than with the Sun exclusion alone."""
+    slew = _example("two_instrument_slew")
+    solution = slew.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    checks = {c.name: c for c in solution.verification.checks}
+    for name in ("tracker_sun_exclusion", "antenna_earth_inclusion"):
+        assert -1e-5 <= checks[name].worst <= 1e-6, (name, checks[name].worst)  # met, and met with equality
+    # the repair tightened the cones where they broke between nodes: at least IPOPT's energy, and close to it
+    assert _ipopt_optimum(slew.build(), solution) <= solution.objective <= _ipopt_optimum(slew.build()) * (1 + 1e-5)
+    free = slew.build()
+    free.constraints = [c for c in free.constraints if c.name != "antenna_earth_inclusion"]
+    assert solution.objective > free.solve().objective
 
 
 def test_a_constraint_over_part_of_the_maneuver_and_at_one_instant():
