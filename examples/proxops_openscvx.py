@@ -23,7 +23,8 @@ CONE_HALF_ANGLE = math.radians(20.0)
 A_MAX, V_MAX, P_MAX = 0.1, 2.0, 100.0
 
 
-def build(intervals: int = 20, method: str = "foh") -> Problem:
+def build(intervals: int = 20, method: str = "foh", entrance_depth: float = 20.0) -> Problem:
+    """The problem on ``intervals`` intervals of ``method``, the cone entered ``entrance_depth`` m below the target."""
     n = MEAN_MOTION
     p = Problem("proxops-cw")
     x, y, z = (p.state(axis, bounds=(-P_MAX, P_MAX), initial=start, final=0.0)
@@ -35,7 +36,7 @@ def build(intervals: int = 20, method: str = "foh") -> Problem:
                 vx: 3 * n**2 * x + 2 * n * vy + ax, vy: -2 * n * vx + ay, vz: -(n**2) * z + az})
     p.path_constraint("approach_cone", y**2 + z**2 - math.tan(CONE_HALF_ANGLE) ** 2 * x**2, "m^2",
                       during=(0.5, 1.0))
-    p.point_constraint("cone_entrance", 20.0 + x, at=0.5, unit="m")
+    p.point_constraint("cone_entrance", entrance_depth + x, at=0.5, unit="m")
     p.final_time(bounds=(10.0, 180.0), guess=120.0)
     p.minimize_fuel()
     p.transcription(intervals, method)

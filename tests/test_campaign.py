@@ -302,3 +302,31 @@ def test_import_and_help_load_neither_dask_nor_pyarrow_nor_matplotlib():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
     assert json.loads(out.stdout) == []
     assert "run_campaign" in dir(convexguid)
+
+
+def test_a_campaign_over_a_problem_module_varies_build_parameters_and_replays(tmp_path, capsys):
+    """examples/proxops_openscvx.py as the problem: a grid over build()'s intervals, its entrance depth dispersed
+    about build()'s default; each row replays with `convexguid solve MODULE --set ...`."""
+    module = ROOT / "examples" / "proxops_openscvx.py"
+    data = {"name": "module-test", "problem": str(module), "grid": [{"key": "intervals", "values": [10, 20]}],
+            "dispersions": [{"key": "entrance_depth", "distribution": "normal", "std": 2.0}],
+            "samples": 1, "seed": 3, "figures": ["final_time_s"]}
+    path = tmp_path / "campaign.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    campaign = load_campaign(path)
+    assert campaign.family.name == "ocp" and campaign.nominal == {"entrance_depth": 20.0}
+    result = run_campaign(path, tmp_path / "out", serial=True)
+    rows = pq.read_table(result.table).to_pylist()
+    assert result.ok and [r["intervals"] for r in rows] == [10, 20]
+    from convexguid.ocp.module import load_module_problem
+
+    replayed = load_module_problem(module, rows[1]["overrides"]).solve()
+    assert replayed.objective == pytest.approx(rows[1]["objective"], rel=1e-9)
+    assert rows[1]["final_time_s"] == pytest.approx(replayed.figures.final_time_s, rel=1e-9)
+    # a key that is not a parameter of build(): one line naming the campaign file and the key, nothing written
+    data["dispersions"][0]["key"] = "depth"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    assert main(["campaign", str(path), "--out", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "dispersions.0.key: depth is not a build() parameter" in err
+    assert not (tmp_path / "bad").exists()

@@ -16,21 +16,25 @@ A campaign file names a problem file and what varies over its runs (keys of the 
     seed_key: simulation.seed                   # problem key that receives each sample's own seed
     figures: [lpmpc_energy_N2m2s, runs.1.energy_N2m2s]
 
-Keys are the dotted paths of ``convexguid solve --set``. A figure is a dotted path into the solve's summary
-(:meth:`convexguid.solution.Solution.summary`), whose first part is a summary key. Every problem is a
-:class:`~convexguid.errors.SpecError` whose one line names the campaign file, the key and the value; the
-problem file and each grid point are validated here, before anything runs.
+Keys are the dotted paths of ``convexguid solve --set``. ``problem`` may also name a problem module (a ``.py`` file
+whose ``build(...)`` returns a :class:`convexguid.ocp.Problem`): its keys are then ``build``'s parameters, a
+dispersion's default mean is the parameter's default, and its figures are those of family ``ocp``. A figure is a
+dotted path into the solve's summary (:meth:`convexguid.solution.Solution.summary`), whose first part is a summary
+key. Every problem is a :class:`~convexguid.errors.SpecError` whose one line names the campaign file, the key and
+the value; the problem file and each grid point are validated here, before anything runs.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import product
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import yaml
 from pydantic import Field, ValidationError, model_validator
 
 from convexguid.campaign.plan import override
@@ -192,6 +196,15 @@ class CampaignSpec(SpecModel):
 
 
 @dataclass(frozen=True)
+class ModuleFamily:
+    """What a campaign reads of a family, for a problem module (:mod:`convexguid.ocp`)."""
+
+    figures: type
+    name: str = "ocp"
+    simulated: bool = False
+
+
+@dataclass(frozen=True)
 class Campaign:
     """A validated campaign with the data of its problem file.
 
@@ -206,9 +219,14 @@ class Campaign:
     source: str
     problem_source: str
     problem_data: dict[str, Any]
-    family: Family
+    family: Family | ModuleFamily
     nominal: dict[str, float]
     fingerprint: str
+
+    @property
+    def module(self) -> bool:
+        """Whether the problem is a module stated in Python (runs build it) rather than a problem file."""
+        return self.problem_source.endswith(".py")
 
     @property
     def command(self) -> str:
@@ -238,18 +256,51 @@ def load_campaign(path: str | Path) -> Campaign:
         raise SpecError(f"{source}: problem: no such file (got {spec.problem!r}, looked for {problem_path}); "
                         "give the problem file's path relative to the campaign file")
     problem_source = str(problem_path)
+    if problem_path.suffix == ".py":
+        return _load_module_campaign(spec, source, problem_path)
     problem_data = read_yaml_mapping(problem_path, "a problem file is a mapping of keys such as name, family")
     base = apply_overrides(problem_data, spec.set, problem_source)
     family = get_family(parse_problem(base, problem_source).family)
     _check_figures(spec, family, source)
     nominal = {d.key: _numeric_value(base, d.key, f"dispersions.{i}.key", source, problem_source)
                for i, d in enumerate(spec.dispersions)}
-    _check_grid_points(spec, base, nominal, source, problem_source)
-    campaign_keys = spec.model_dump(mode="json", exclude={"name", "description"})
+    _check_grid_points(spec, nominal, source,
+                       lambda overrides: parse_problem(apply_overrides(base, overrides, problem_source),
+                                                       problem_source))
     problem_keys = {k: v for k, v in problem_data.items() if k not in PROSE_KEYS}
-    fingerprint = hashlib.sha256(json.dumps({"campaign": campaign_keys, "problem": problem_keys},
-                                            sort_keys=True, default=str).encode()).hexdigest()
-    return Campaign(spec, source, problem_source, problem_data, family, nominal, fingerprint)
+    return Campaign(spec, source, problem_source, problem_data, family, nominal, _fingerprint(spec, problem_keys))
+
+
+def _fingerprint(spec: CampaignSpec, problem: Any) -> str:
+    campaign_keys = spec.model_dump(mode="json", exclude={"name", "description"})
+    return hashlib.sha256(json.dumps({"campaign": campaign_keys, "problem": problem},
+                                     sort_keys=True, default=str).encode()).hexdigest()
+
+
+def _load_module_campaign(spec: CampaignSpec, source: str, path: Path) -> Campaign:
+    """A campaign over a problem module: keys are ``build``'s parameters, checked by building the problem."""
+    # the CasADi layer loads only for a campaign that names a module
+    from convexguid.ocp.module import load_module_problem, module_parameters
+    from convexguid.ocp.solve import OcpFigures
+
+    try:
+        load_module_problem(path, spec.set)
+        defaults = module_parameters(path)
+    except SpecError as exc:
+        raise SpecError(f"{source}: problem: {exc}") from None
+    family = ModuleFamily(OcpFigures)
+    _check_figures(spec, family, source)
+    given = {**defaults, **{o.partition("=")[0].strip(): yaml.safe_load(o.partition("=")[2]) for o in spec.set}}
+    nominal = {}
+    for i, d in enumerate(spec.dispersions):
+        value = given.get(d.key, MISSING)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise SpecError(f"{source}: dispersions.{i}.key: {d.key} is not a build() parameter with a number for "
+                            f"its default in {path} (got {value if value is not MISSING else 'no such parameter'!r});"
+                            f" build()'s parameters: {', '.join(defaults) or 'none'}")
+        nominal[d.key] = float(value)
+    _check_grid_points(spec, nominal, source, lambda overrides: load_module_problem(path, overrides))
+    return Campaign(spec, source, str(path), {}, family, nominal, _fingerprint(spec, path.read_text()))
 
 
 def _check_run_count(spec: CampaignSpec, source: str) -> None:
@@ -281,16 +332,17 @@ def _numeric_value(data: dict[str, Any], key: str, where: str, source: str, prob
     return float(node)
 
 
-def _check_grid_points(spec: CampaignSpec, base: dict[str, Any], nominal: dict[str, float], source: str,
-                       problem_source: str) -> None:
-    """Validate the problem at every grid point (dispersed keys at their centre, the seed key at 0)."""
+def _check_grid_points(spec: CampaignSpec, nominal: dict[str, float], source: str,
+                       validate: Callable[[list[str]], Any]) -> None:
+    """Validate the problem at every grid point (dispersed keys at their centre, the seed key at 0) by
+    ``validate(overrides)``, which raises :class:`SpecError` for an invalid problem."""
     fixed = [override(d.key, d.centre(nominal[d.key])) for d in spec.dispersions]
     fixed += [override(spec.seed_key, 0)] if spec.seed_key is not None else []
     axes = [[(i, axis.names, point) for point in axis.points()] for i, axis in enumerate(spec.grid)]
     for combination in product(*axes):
         overrides = [override(k, v) for _, names, point in combination for k, v in zip(names, point, strict=True)]
         try:
-            parse_problem(apply_overrides(base, overrides + fixed, problem_source), problem_source)
+            validate(overrides + fixed)
         except SpecError as exc:
             where = ", ".join(f"grid.{i}" for i, _, _ in combination) or "dispersions"
             raise SpecError(f"{source}: {where}: the problem is invalid at {' '.join(overrides + fixed)} "

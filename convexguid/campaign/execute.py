@@ -72,8 +72,12 @@ def run_task(task: RunTask) -> dict[str, Any]:
 
     started = time.perf_counter()
     try:
-        spec = parse_problem(apply_overrides(task.problem, task.overrides, task.source), task.source)
-        solution = solve(spec)
+        if task.source.endswith(".py"):  # a problem module: build() with the run's parameters
+            from convexguid.ocp.module import load_module_problem
+
+            solution = load_module_problem(task.source, task.overrides).solve()
+        else:
+            solution = solve(parse_problem(apply_overrides(task.problem, task.overrides, task.source), task.source))
         summary = solution.summary()
         outcome = {"status": solution.status, "message": one_line(solution.message, REASON_LENGTH),
                    "objective": summary["objective"],
