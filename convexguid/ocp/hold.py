@@ -84,6 +84,9 @@ class HoldProgram(Transcription):
         values = self.control_values(z)
         return values if self.order == 1 else np.vstack([values, values[-1:]])
 
+    def values_from_nodes(self, controls: np.ndarray) -> np.ndarray:
+        return controls if self.order == 1 else controls[:-1]
+
     def interval_control_columns(self, k: int, j: int) -> tuple[int, ...]:
         first, nu = self.control_start, self.nu
         return (first + k * nu + j, first + (k + 1) * nu + j) if self.order == 1 else (first + k * nu + j,)

@@ -54,6 +54,8 @@ class PathConstraint:
     unit: str
     during: tuple[float, float] = (0.0, 1.0)
     at: float | None = None
+    at_nodes: bool = True
+    """False: imposed between the nodes only (Hermite-Simpson's midpoints), for a bound the nodes hold hard."""
     cone: tuple[ca.SX, ca.SX] | None = None
     """For a second-order cone ``||vector|| <= bound``: ``(bound, vector)``, affine in states and controls (kept
     exact in every subproblem); ``expression`` is then ``||vector|| - bound``, what the dense check evaluates."""
@@ -62,6 +64,8 @@ class PathConstraint:
         """Whether the constraint is imposed at the point ``share`` of the maneuver (a node or a midpoint)."""
         if self.at is not None:
             return node and abs(share - self.at) < 1e-9
+        if node and not self.at_nodes:
+            return False
         return self.during[0] - 1e-12 <= share <= self.during[1] + 1e-12
 
 
@@ -90,6 +94,9 @@ class Problem:
         self.objective: str | None = None
         self.fuel_norm = 1
         self.terminal: ca.SX | None = None
+        self.boundary_constraints: list[tuple[str, ca.SX, str]] = []
+        self.guess_nodes: tuple[np.ndarray, np.ndarray] | None = None
+        self.control_interpolation = "quadratic"
         self.intervals = 30
         self.method = "hermite-simpson"
         self.substeps = 4
@@ -143,10 +150,12 @@ class Problem:
             if self.tf <= 0:
                 raise SpecError(f"{where}: fixed: must be positive (got {self.tf:g})")
             return
-        low, high = (_number(f"{where}: bounds", b, allow_none=False) for b in bounds)
-        if not 0 < low < high:
-            raise SpecError(f"{where}: bounds: expected 0 < lower < upper (got ({low:g}, {high:g}))")
-        self.tf_bounds = (low, high)
+        low, high = _number(f"{where}: bounds", bounds[0], allow_none=False), _number(f"{where}: bounds", bounds[1])
+        if not 0 < low < (math.inf if high is None else high):
+            raise SpecError(f"{where}: bounds: expected 0 < lower < upper (got ({low:g}, {high}))")
+        if high is None and guess is None:
+            raise SpecError(f"{where}: guess: needed when the final time has no upper bound")
+        self.tf_bounds = (low, math.inf if high is None else high)
         self.tf_guess = _number(f"{where}: guess", guess) or 0.5 * (low + high)
 
     def dynamics(self, rates: Mapping[ca.SX, ca.SX]) -> None:
@@ -164,9 +173,10 @@ class Problem:
             self.rates[name] = rate
 
     def path_constraint(self, name: str, expression: ca.SX, unit: str = "",
-                        during: tuple[float, float] | None = None) -> None:
+                        during: tuple[float, float] | None = None, at_nodes: bool = True) -> None:
         """``expression <= 0`` along the trajectory, or over the share ``during = (start, end)`` of it (0 to 1 of
-        the final time); nonconvex allowed: the engine linearizes it."""
+        the final time); nonconvex allowed: the engine linearizes it. ``at_nodes=False`` imposes it between the
+        nodes only (Hermite-Simpson's midpoints), for a bound the nodes already hold as a hard state bound."""
         where = f"{self.name}: path_constraint {name!r}"
         expression = self._scalar(where, name, expression)
         window = (0.0, 1.0) if during is None else tuple(_number(f"{where}: during", v, allow_none=False)
@@ -174,7 +184,7 @@ class Problem:
         if len(window) != 2 or not 0.0 <= window[0] < window[1] <= 1.0:
             raise SpecError(f"{where}: during: expected (start, end) with 0 <= start < end <= 1, shares of the final "
                             f"time (got {during!r})")
-        self.constraints.append(PathConstraint(name, expression, unit, window))
+        self.constraints.append(PathConstraint(name, expression, unit, window, at_nodes=bool(at_nodes)))
 
     def cone_constraint(self, name: str, vector, bound, unit: str = "",
                         during: tuple[float, float] | None = None) -> None:
@@ -197,6 +207,38 @@ class Problem:
         vector = ca.vertcat(*entries)
         self.path_constraint(name, ca.norm_2(vector) - bound, unit, during)
         self.constraints[-1] = replace(self.constraints[-1], cone=(bound, vector))
+
+    def boundary_constraint(self, name: str, expression, at: str = "final") -> None:
+        """``expression == 0`` on the initial or final state (``at``), affine in the states: hard linear rows in
+        every subproblem. For a condition the boundary values cannot say, e.g. a final attitude as the vector part
+        of the quaternion error (three rows: fixing all four components would also fix the norm, which the
+        dynamics carry)."""
+        where = f"{self.name}: boundary_constraint {name!r}"
+        if at not in ("initial", "final"):
+            raise SpecError(f"{where}: at: expected 'initial' or 'final' (got {at!r})")
+        expression = ca.SX(expression)
+        if expression.shape[1] != 1:
+            raise SpecError(f"{where}: expected a column of expressions (got shape {expression.shape})")
+        variables = ca.vertcat(self.state_vector(), self.control_vector(), self.time)
+        if ca.depends_on(expression, ca.vertcat(self.control_vector(), self.time)):
+            raise SpecError(f"{where}: {expression} uses a control or the time; state it on the states only")
+        if ca.depends_on(ca.jacobian(expression, variables), variables):
+            raise SpecError(f"{where}: {expression} is not affine in the states; a boundary constraint is kept as "
+                            "hard linear rows")
+        if name in {b[0] for b in self.boundary_constraints}:
+            raise SpecError(f"{where}: the name is already taken")
+        self.boundary_constraints.append((name, expression, at))
+
+    def initial_guess(self, states, controls) -> None:
+        """Start the SCP from these node values (arrays of ``intervals + 1`` rows, a column per state and per
+        control, in their order of declaration) instead of the straight line."""
+        states, controls = np.asarray(states, dtype=float), np.asarray(controls, dtype=float)
+        shapes = ((len(self.states),), (len(self.controls),))
+        if states.ndim != 2 or controls.ndim != 2 or (states.shape[1],) != shapes[0] or \
+                (controls.shape[1],) != shapes[1] or states.shape[0] != controls.shape[0]:
+            raise SpecError(f"{self.name}: initial_guess: expected arrays of (nodes, {shapes[0][0]}) states and "
+                            f"(nodes, {shapes[1][0]}) controls (got {states.shape} and {controls.shape})")
+        self.guess_nodes = (states, controls)
 
     def point_constraint(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
         """``expression <= 0`` at the instant ``at`` (a share of the final time, on a node of the grid)."""
@@ -240,10 +282,12 @@ class Problem:
                             f"{expression.shape})")
         self.objective, self.terminal = "terminal", expression
 
-    def transcription(self, intervals: int, method: str = "hermite-simpson", substeps: int = 4) -> None:
+    def transcription(self, intervals: int, method: str = "hermite-simpson", substeps: int = 4,
+                      control: str = "quadratic") -> None:
         """``intervals`` equal intervals, transcribed by ``method``: ``"hermite-simpson"`` (collocation, the control
-        quadratic between nodes), ``"zoh"`` (the control constant on each interval) or ``"foh"`` (linear between
-        nodes); the holds integrate the dynamics across each interval by ``substeps`` Runge-Kutta steps."""
+        quadratic between nodes through a midpoint value, or with ``control="linear"`` linear between the node
+        values), ``"zoh"`` (the control constant on each interval) or ``"foh"`` (linear between nodes); the holds
+        integrate the dynamics across each interval by ``substeps`` Runge-Kutta steps."""
         where = f"{self.name}: transcription"
         if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < 2:
             raise SpecError(f"{where}: intervals: expected an integer >= 2 (got {intervals!r})")
@@ -251,7 +295,10 @@ class Problem:
             raise SpecError(f"{where}: method: expected one of {', '.join(TRANSCRIPTION_METHODS)} (got {method!r})")
         if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
             raise SpecError(f"{where}: substeps: expected an integer >= 1 (got {substeps!r})")
-        self.intervals, self.method, self.substeps = intervals, method, substeps
+        if control not in ("quadratic", "linear") or (control == "linear" and method != "hermite-simpson"):
+            raise SpecError(f"{where}: control: expected 'quadratic' or 'linear' with hermite-simpson (got "
+                            f"{control!r} with {method})")
+        self.intervals, self.method, self.substeps, self.control_interpolation = intervals, method, substeps, control
 
     # --- checks and solve -------------------------------------------------------------------------------------
     def check(self) -> None:
@@ -285,6 +332,7 @@ class Problem:
                             "function of the final state and time")
         for label, expression in [*((f"dynamics of {k}", e) for k, e in self.rates.items()),
                                   *((f"path_constraint {c.name!r}", c.expression) for c in self.constraints),
+                                  *((f"boundary_constraint {b[0]!r}", b[1]) for b in self.boundary_constraints),
                                   *terminal]:
             unknown = sorted({str(s) for s in ca.symvar(expression)} - known)
             if unknown:

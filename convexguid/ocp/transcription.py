@@ -135,6 +135,10 @@ class Transcription:
         """The same problem on twice the intervals, and ``z`` carried onto it (margins start afresh)."""
         raise NotImplementedError
 
+    def values_from_nodes(self, controls: np.ndarray) -> np.ndarray:
+        """The control values, shape ``(C, nu)``, of a control given at the nodes (``(N + 1, nu)``)."""
+        raise NotImplementedError
+
     def interval_control_columns(self, k: int, j: int) -> tuple[int, ...]:
         """Columns of control ``j``'s values that shape interval ``k`` (for the interpolated bounds)."""
         raise NotImplementedError
@@ -277,6 +281,9 @@ class Transcription:
         """States straight from their initial to their final values (the other given one where only one is),
         controls at their guess (else the middle of finite bounds, else 0), the final time at its guess."""
         p, N = self.problem, self.N
+        tf = p.tf_guess if self.free_time else p.tf
+        if p.guess_nodes is not None and p.guess_nodes[0].shape[0] == N + 1:
+            return self.assemble(p.guess_nodes[0], self.values_from_nodes(p.guess_nodes[1]), tf)
         s = np.linspace(0.0, 1.0, N + 1)[:, None]
         start = np.array([v.initial if v.initial is not None else (v.final or 0.0) for v in p.states])
         end = np.array([v.final if v.final is not None else start[i] for i, v in enumerate(p.states)])
@@ -334,6 +341,10 @@ class Transcription:
                     rows.append(node * nx + i)
                     values.append(value)
         A = sp.coo_matrix((np.ones(len(rows)), (np.arange(len(rows)), rows)), shape=(len(rows), n))
+        if p.boundary_constraints:
+            rows_b, values_b = self._boundary_rows()
+            A = sp.vstack([A, rows_b]).tocoo()
+            values += list(values_b)
         low, high = self._bounds()
         upper, lower = np.flatnonzero(np.isfinite(high)), np.flatnonzero(np.isfinite(low))
         blocks = [sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
@@ -355,6 +366,21 @@ class Transcription:
                             self._interpolated_control_limits(),
                             np.zeros(2 * self.num_slacks if self.fuel_norm == 1 else 0)])
         return LinearConstraints(A, np.array(values, dtype=float), G.tocoo(), h)
+
+    def _boundary_rows(self) -> tuple[sp.coo_matrix, np.ndarray]:
+        """The affine boundary constraints ``a^T x_0 + c = 0`` or ``a^T x_N + c = 0`` as rows ``A z = b``."""
+        p, nx = self.problem, self.nx
+        x = p.state_vector()
+        blocks, values = [], []
+        for _, expression, at in p.boundary_constraints:
+            node = 0 if at == "initial" else self.N
+            function = ca.Function("boundary", [x], [ca.jacobian(expression, x), expression])
+            gradient, offset = (np.asarray(v, dtype=float) for v in function(np.zeros(nx)))
+            block = np.zeros((gradient.shape[0], self.num_variables))
+            block[:, node * nx: (node + 1) * nx] = gradient
+            blocks.append(block)
+            values.append(-offset.ravel())
+        return sp.coo_matrix(np.vstack(blocks)), np.concatenate(values)
 
     def _interpolated_control_bounds(self) -> list[sp.coo_matrix]:
         """Rows ``+-(sum_i a_i v_i)``: the control's interpolant at :data:`INTERPOLATION_SAMPLES` for every bounded
