@@ -9,9 +9,10 @@ Run: python examples/betts_slew.py
 
 import math
 
-import casadi as ca
+import numpy as np
 
 from convexguid.ocp import Problem
+from convexguid.ocp.attitude import rigid_body_dynamics
 
 INERTIA = (5621.0, 4547.0, 2364.0)
 TORQUE_MAX = 50.0
@@ -25,11 +26,7 @@ def build(intervals: int = 100) -> Problem:
          for i in range(4)]
     w = [p.state(f"w{i + 1}", initial=0.0, final=0.0, scale=0.15) for i in range(3)]
     u = [p.control(f"u{i + 1}", bounds=(-TORQUE_MAX, TORQUE_MAX)) for i in range(3)]
-    qv, q4, omega = ca.vertcat(*q[:3]), q[3], ca.vertcat(*w)
-    q_rate = 0.5 * ca.vertcat(q4 * omega + ca.cross(qv, omega), -ca.dot(omega, qv))
-    J = ca.diag(ca.DM(INERTIA))
-    w_rate = ca.solve(J, ca.vertcat(*u) - ca.cross(omega, J @ omega))
-    p.dynamics({**{q[i]: q_rate[i] for i in range(4)}, **{w[i]: w_rate[i] for i in range(3)}})
+    p.dynamics(rigid_body_dynamics(q, w, u, np.diag(INERTIA)))
     p.final_time(bounds=(10.0, 60.0), guess=35.0)
     p.minimize_time()
     p.transcription(intervals)

@@ -15,8 +15,10 @@ Run: python examples/two_instrument_slew.py
 import math
 
 import casadi as ca
+import numpy as np
 
 from convexguid.ocp import Problem
+from convexguid.ocp.attitude import inertial_direction, rigid_body_dynamics
 
 INERTIA = (20.0, 22.0, 18.0)  # kg m^2
 TORQUE_MAX = 0.05  # N m
@@ -28,12 +30,6 @@ SUN_EXCLUSION = math.radians(25.0)
 EARTH_INCLUSION = math.radians(18.5)
 
 
-def rotate(q, vector):
-    """The body vector ``vector`` in inertial axes, for the body-to-inertial quaternion ``q`` (scalar last)."""
-    qv, q4, b = ca.vertcat(*q[:3]), q[3], ca.DM(vector)
-    return b + 2 * q4 * ca.cross(qv, b) + 2 * ca.cross(qv, ca.cross(qv, b))
-
-
 def build(intervals: int = 40, duration: float = 60.0) -> Problem:
     p = Problem("two-instrument-slew")
     final_q = (0.0, 0.0, math.sin(ANGLE / 2), math.cos(ANGLE / 2))
@@ -41,13 +37,10 @@ def build(intervals: int = 40, duration: float = 60.0) -> Problem:
          for i in range(4)]
     w = [p.state(f"w{i + 1}", initial=0.0, final=0.0, scale=0.05) for i in range(3)]
     u = [p.control(f"u{i + 1}", bounds=(-TORQUE_MAX, TORQUE_MAX)) for i in range(3)]
-    qv, q4, omega = ca.vertcat(*q[:3]), q[3], ca.vertcat(*w)
-    q_rate = 0.5 * ca.vertcat(q4 * omega + ca.cross(qv, omega), -ca.dot(omega, qv))
-    J = ca.diag(ca.DM(INERTIA))
-    w_rate = ca.solve(J, ca.vertcat(*u) - ca.cross(omega, J @ omega))
-    p.dynamics({**{q[i]: q_rate[i] for i in range(4)}, **{w[i]: w_rate[i] for i in range(3)}})
-    p.path_constraint("tracker_sun_exclusion", ca.dot(rotate(q, TRACKER), ca.DM(SUN)) - math.cos(SUN_EXCLUSION))
-    p.path_constraint("antenna_earth_inclusion", math.cos(EARTH_INCLUSION) - ca.dot(rotate(q, ANTENNA), ca.DM(EARTH)))
+    p.dynamics(rigid_body_dynamics(q, w, u, np.diag(INERTIA)))
+    tracker, antenna = inertial_direction(q, TRACKER), inertial_direction(q, ANTENNA)
+    p.path_constraint("tracker_sun_exclusion", ca.dot(tracker, ca.DM(SUN)) - math.cos(SUN_EXCLUSION))
+    p.path_constraint("antenna_earth_inclusion", math.cos(EARTH_INCLUSION) - ca.dot(antenna, ca.DM(EARTH)))
     p.final_time(fixed=duration)
     p.minimize_energy()
     p.transcription(intervals)

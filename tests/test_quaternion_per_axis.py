@@ -104,9 +104,11 @@ def test_program_rows_and_scales_are_per_axis():
     case = build_case(load_problem(FENG))
     guess, tf = eigenaxis_start(case, 6)
     program = QuaternionProgram(case, 6, guess, tf)
-    np.testing.assert_array_equal(program.variable_scale().reshape(7, 10)[:, 7:], np.tile(FENG_BOX, (7, 1)))
+    torques = slice(program.control_start, program.slack_start)  # the node torques, node by node
+    np.testing.assert_array_equal(program.variable_scale()[torques].reshape(7, 3), np.tile(FENG_BOX, (7, 1)))
     lin = program.linear_constraints()
-    torque_rows = lin.G.tocsr()[:, 7:10]  # node 0's torque columns: +u <= box, -u <= box
+    # node 0's torque columns: +u <= box, -u <= box
+    torque_rows = lin.G.tocsr()[:, program.control_start: program.control_start + 3]
     hit = np.flatnonzero(np.abs(torque_rows).sum(axis=1).A1)
     np.testing.assert_array_equal(lin.h[hit], np.concatenate([FENG_BOX, FENG_BOX]))
     assert path_transfer_problem(case).torque_max == 5.0  # the planner takes the tightest (smallest) bound
@@ -199,7 +201,8 @@ def test_energy_matches_ipopt_on_the_same_transcription(overrides):
           f"({ref.iterations} it)")
     assert abs(result.objective - ref.objective) <= 5e-3 * ref.objective
     lin = program.linear_constraints()
-    assert np.max(lin.G @ ref.x - lin.h) < 1e-7  # IPOPT's optimum meets the per-axis rows of the numpy program
+    # IPOPT's optimum meets the per-axis rows of the family's program
+    assert np.max(lin.G @ program.from_node_rows(ref.x) - lin.h) < 1e-7
 
 
 def test_torque_plot_draws_each_axis_bound(nominal, tmp_path, monkeypatch):

@@ -46,7 +46,9 @@ def _rest_to_rest(inertia: np.ndarray, angle: float = np.pi / 2, **extra) -> Att
 
 
 def _assert_satisfies_program(program: QuaternionProgram, x: np.ndarray) -> None:
-    """The numpy transcription's defects, boundary rows, boxes, cones and forbidden rows hold at ``x``."""
+    """The family's program (the case stated on convexguid.ocp) holds at the reference's node rows ``x``: its
+    defects, boundary rows, boxes, cones and forbidden rows."""
+    x = program.from_node_rows(x)
     ev = program.evaluate(x, jacobians=False)
     for block in ev.equalities:
         assert np.max(np.abs(block.values)) < DEFECT_TOL, block.name
@@ -71,8 +73,8 @@ def test_minimum_time_satisfies_the_numpy_transcription(no_cone_time):
     case, guess, tf_guess, result = no_cone_time
     assert result.success, result.status
     program = QuaternionProgram(case, K_SMALL, guess, tf_guess)
-    assert result.x.shape == (program.num_variables,)
-    assert result.objective == pytest.approx(program.final_time(result.x))
+    assert program.from_node_rows(result.x).shape == (program.num_variables,)
+    assert result.objective == pytest.approx(program.final_time(program.from_node_rows(result.x)))
     _assert_satisfies_program(program, result.x)
 
 
@@ -101,7 +103,7 @@ def test_full_inertia_keep_in_and_forbidden_attitude():
     assert result.success, result.status
     program = QuaternionProgram(case, K_SMALL, guess, tf_guess, margin)
     _assert_satisfies_program(program, result.x)
-    q = program.nodes(result.x)[:, :4]
+    q = program.nodes(program.from_node_rows(result.x))[:, :4]
     q = q / np.linalg.norm(q, axis=1, keepdims=True)  # |q| drifts O(h^4) from 1: compare normalised attitudes
     closest = np.degrees(quat_angle_between(q, case.forbidden[0].q).min())
     widest = keep_out_angles_deg(q, zenith, zenith).max()
@@ -121,9 +123,9 @@ def test_energy_decreases_with_the_final_time():
         result = solve_quaternion_attitude_ipopt(case, K_SMALL, guess, tf)
         assert result.success, result.status
         program = QuaternionProgram(case, K_SMALL, guess, tf)
-        assert result.x.shape == (program.num_variables,)
+        assert program.from_node_rows(result.x).shape == (program.num_variables,)
         _assert_satisfies_program(program, result.x)
-        ev = program.evaluate(result.x, jacobians=False)
+        ev = program.evaluate(program.from_node_rows(result.x), jacobians=False)
         assert result.objective == pytest.approx(np.sum(program.residual_weights() * ev.residuals**2), rel=1e-10)
         energies.append(result.objective)
     print(f"energy: tf=50 s {energies[0]:.8g}, tf=70 s {energies[1]:.8g}")
@@ -142,7 +144,7 @@ def test_multicone_minimum_time_clears_every_cone():
     assert result.success, result.status
     program = QuaternionProgram(case, intervals, guess, tf_guess)
     _assert_satisfies_program(program, result.x)
-    q = program.nodes(result.x)[:, :4]
+    q = program.nodes(program.from_node_rows(result.x))[:, :4]
     assert len(case.cones) == 4
     for cone in case.cones:
         cosine, _ = cone_cosine(cone, q)

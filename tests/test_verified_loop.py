@@ -14,6 +14,7 @@ import pytest
 
 from convexguid.api import solve
 from convexguid.cli import main
+from convexguid.errors import SpecError
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
@@ -107,11 +108,29 @@ def test_impossible_slew_is_infeasible_with_a_named_certificate_or_unverified(ca
 
 
 def test_inconsistent_hard_constraints_are_certified_by_the_elastic_program():
-    """Rate bounds that exclude the required final rate: the hard linear constraints admit no point."""
-    sol = solve(PROBLEMS / "wang_multicone_time.yaml", ["spacecraft.rate_max_degps=0.5",
-                                                       "boundary.final.rate_degps=[1, 0, 0]"])
+    """A final condition the bounds cannot meet (x + v = 3 at the end with x and v within [0, 1]): the hard linear
+    constraints admit no point, which no check before the solve sees."""
+    from convexguid.ocp import Problem
+
+    p = Problem("unreachable")
+    x = p.state("x", bounds=(0.0, 1.0), initial=0.0)
+    v = p.state("v", bounds=(0.0, 1.0), initial=0.0)
+    u = p.control("u", bounds=(-1.0, 1.0))
+    p.dynamics({x: v, v: u})
+    p.boundary_constraint("too_far", x + v - 3.0)
+    p.final_time(fixed=2.0)
+    p.minimize_energy()
+    p.transcription(10)
+    sol = p.solve()
     assert sol.status == "infeasible"
     assert "certificate" in sol.message and "elastic" in sol.message
+
+
+def test_a_boundary_rate_outside_the_rate_box_is_one_line_naming_the_key():
+    with pytest.raises(SpecError, match=r"boundary\.final\.rate_degps: a component is above "
+                                        r"spacecraft\.rate_max_degps = 0\.5"):
+        solve(PROBLEMS / "wang_multicone_time.yaml", ["spacecraft.rate_max_degps=0.5",
+                                                      "boundary.final.rate_degps=[1, 0, 0]"])
 
 
 def test_a_start_that_breaks_the_torque_box_is_restored_and_still_reaches_the_optimum():

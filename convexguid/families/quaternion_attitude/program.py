@@ -8,35 +8,35 @@ the body torque :math:`u`, full rigid-body dynamics with a full inertia matrix:
     \\dot q = \\tfrac12\\, q \\otimes [\\omega, 0], \\qquad
     \\dot\\omega = I^{-1}(u - \\omega \\times I\\omega).
 
-**Transcription.** Hermite-Simpson collocation on ``K`` equal intervals
-(:mod:`convexguid.transcription.hermite_simpson`, shared with the rendezvous family), node
-variables :math:`(q_k, \\omega_k, u_k)` and, for minimum time, the final time :math:`t_f` with
-:math:`h = t_f/K`. Chosen over first-order hold with exact discretization because the defects
-and their Jacobians are closed-form (no integration of the linearized dynamics each SCP
-iteration), the method is fourth-order accurate, the free final time enters through
-:math:`h` exactly as the burn durations do in the rendezvous family, and the Jacobians are
-sparse (each defect touches two nodes and :math:`t_f`).
+**Stated on convexguid.ocp.** :func:`attitude_problem` states the case as a :class:`convexguid.ocp.Problem` (the
+framework a user states a problem in): states ``q1..q4``, ``w1..w3``, torques ``u1..u3``, the dynamics above as
+CasADi expressions, the constraints below; :class:`QuaternionProgram` is its Hermite-Simpson transcription
+(:mod:`convexguid.ocp.hermite_simpson`) on ``K`` equal intervals with the torque linear between nodes, CasADi's
+exact sparse Jacobians and Lagrangian Hessian, and a free final time through :math:`h = t_f/K`. (Before, the family
+wrote the same NLP by hand in numpy: 481 lines of this module, now 302 with the start's symmetry offset; the figures
+of every problem file are unchanged, validation/REPORT.md.)
 
 **Unit quaternion.** No norm constraint is imposed: the kinematics preserve
 :math:`|q|` exactly in continuous time and Hermite-Simpson keeps it to
 :math:`O(h^4)` per interval (the drift is reported as ``max_quaternion_norm_error``); adding
-:math:`|q_k| = 1` on top of the defects would over-determine the discrete system. The cone
-maps use the quadratic form :math:`C(q)` without normalization. The verification
-propagates the true dynamics and renormalizes.
+:math:`|q_k| = 1` on top of the defects would over-determine the discrete system. The final attitude is the
+vector part of the attitude error, :math:`\\operatorname{vec}(q_f^{-1} \\otimes q_K) = 0` (three affine rows: all
+four components would fix the norm as well). The cone maps use the quadratic form :math:`C(q)` without
+normalization. The verification propagates the true dynamics and renormalizes.
 
-**Constraints.** Torque and rate boxes at the nodes (each torque axis with its own bound; the torque
-is interpolated linearly between nodes, so its box holds everywhere); keep-out cones
-:math:`b^T C_{BI}(q_k) r \\le \\cos(\\theta + m)` and keep-in cones
-:math:`b^T C_{BI}(q_k) r \\ge \\cos(\\alpha - m)` at the nodes and at the Hermite-Simpson
+**Constraints.** Torque and rate boxes at the nodes (hard bounds; each torque axis with its own bound; the torque
+is linear between nodes, so its box holds everywhere); keep-out cones
+:math:`b^T C_{BI}(q) r \\le \\cos(\\theta + m)` and keep-in cones
+:math:`b^T C_{BI}(q) r \\ge \\cos(\\alpha - m)` at the nodes and at the Hermite-Simpson
 interval midpoints (the rate box too, at the midpoints), with a margin :math:`m` that
 is raised when the dense check finds the path cutting a cone's edge between nodes; the
 forbidden attitude :math:`|q_b \\cdot q| \\le \\cos((\\theta_m + m)/2)`, two rows per node and midpoint.
 
 **Objectives.** Minimum time (:math:`\\min t_f`) or minimum energy at fixed :math:`t_f`
 (:math:`\\int |u|^2 dt` by Simpson's rule on the linear torque, as least-squares residuals).
-The objective's value at the initial guess (``objective_scale``) sets the unit of the
-exact-penalty weight (``scp_settings`` in :mod:`convexguid.families.quaternion_attitude.solve`),
-so one weight serves a 0.04 N^2 m^2 s energy and a 100 s slew alike.
+The objective's value at the start sets the unit of the exact-penalty weight (``penalty_unit="objective"`` in
+``scp_settings``, :mod:`convexguid.families.quaternion_attitude.solve`), so one weight serves a 0.04 N^2 m^2 s
+energy and a 100 s slew alike.
 
 References
 ----------
@@ -50,21 +50,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import casadi as ca
 import numpy as np
-import scipy.sparse as sp
 
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.dynamics.torque import LinearTorque
 from convexguid.geometry import PointingCone, eigenaxis_rotation
-from convexguid.rotations import axis_angle_to_quat, quat_conjugate, quat_multiply, quat_rate_matrix, skew
-from convexguid.scp.problem import (
-    ConstraintBlock,
-    Evaluation,
-    LinearConstraints,
-    OutputConstraints,
-    ProgramSize,
-)
-from convexguid.transcription.hermite_simpson import hermite_simpson_defects
+from convexguid.ocp import Problem
+from convexguid.ocp.attitude import rigid_body_dynamics
+from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
+from convexguid.rotations import axis_angle_to_quat, quat_conjugate, quat_multiply
+from convexguid.scp.problem import ProgramSize
 
 NX, NU = 7, 3
 NODE = NX + NU
@@ -124,32 +120,6 @@ class AttitudeCase:
         return np.linalg.inv(self.inertia)
 
 
-def rigid_body_dynamics(inertia: np.ndarray, inertia_inv: np.ndarray):
-    """``f(x, u)`` and its Jacobian on stacked rows, for :func:`hermite_simpson_defects`."""
-
-    def f(x: np.ndarray, u: np.ndarray) -> np.ndarray:
-        q, w = x[:, :4], x[:, 4:]
-        qdot = 0.5 * quat_multiply(q, np.column_stack([w, np.zeros(len(w))]))
-        wdot = (u - np.cross(w, w @ inertia.T)) @ inertia_inv.T
-        return np.hstack([qdot, wdot])
-
-    def jac(x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        q, w = x[:, :4], x[:, 4:]
-        k = len(x)
-        F = np.zeros((k, NX, NX))
-        F[:, :4, :4] = 0.5 * quat_rate_matrix(w)
-        # q (x) [w, 0] = [q_w w + q_v x w, -q_v . w]  =>  d/dw = [q_w I + [q_v x]; -q_v^T]
-        F[:, :3, 4:] = 0.5 * (q[:, 3, None, None] * np.eye(3) + skew(q[:, :3]))
-        F[:, 3, 4:] = -0.5 * q[:, :3]
-        # d(w x Iw)/dw = [w x] I - [Iw x]
-        F[:, 4:, 4:] = -inertia_inv @ (skew(w) @ inertia - skew(w @ inertia.T))
-        G = np.zeros((k, NX, NU))
-        G[:, 4:, :] = inertia_inv
-        return F, G
-
-    return f, jac
-
-
 def eigenaxis_guess(case: AttitudeCase, times: np.ndarray) -> np.ndarray:
     """Rest-to-rest eigenaxis slew with a cubic angle profile :math:`\\Phi(3\\tau^2 - 2\\tau^3)`, as node rows."""
     axis, angle = eigenaxis_rotation(case.q0, case.qf)
@@ -165,9 +135,34 @@ def eigenaxis_guess(case: AttitudeCase, times: np.ndarray) -> np.ndarray:
 
 
 def eigenaxis_start(case: AttitudeCase, intervals: int) -> tuple[np.ndarray, float]:
-    """The default SCP start: eigenaxis node rows over the case's :math:`t_f` (or :func:`eigenaxis_time_guess`)."""
+    """The default SCP start: eigenaxis node rows over the case's :math:`t_f` (or :func:`eigenaxis_time_guess`),
+    moved off the eigenaxis by :func:`off_symmetry`."""
     tf_guess = case.tf or eigenaxis_time_guess(case)
-    return eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf_guess, intervals + 1)), tf_guess
+    rows = eigenaxis_guess(case, case.t0 + np.linspace(0.0, tf_guess, intervals + 1))
+    return off_symmetry(case, rows, tf_guess), tf_guess
+
+
+SYMMETRY_OFFSET = 1e-6
+"""Size of :func:`off_symmetry`'s offset, as a share of each variable's scale."""
+
+
+def off_symmetry(case: AttitudeCase, rows: np.ndarray, tf_guess: float) -> np.ndarray:
+    """``rows`` moved by a fixed pseudo-random offset of :data:`SYMMETRY_OFFSET` of each variable's scale.
+
+    An eigenaxis slew lies on a symmetry of many slews (Betts': torques about y and z of either sign give the same
+    time), and the SCP leaves it towards whichever mirror image the first asymmetry points to. Without an offset
+    that was round-off: under 1e-12 changes of the inputs (seven draws), Betts' slew ended on three of its four
+    mirror images, once on a 2.8% slower local optimum (29.4358 s). The offset is the same on every machine and ten
+    orders above round-off, so it chooses: with it the same seven draws give one mirror image, 28.642493 s, in 35
+    iterations every time; guo2011's minimum-time and minimum-energy slews and the multi-cone slew likewise give one
+    answer and one iteration count each. It is far too small to move an optimum, but its direction picks the branch:
+    over eight directions (generator seeds 1-8), guo2011 minimum time reached 85.32098 s every time (one direction
+    tried before, seed 20261124, reached a 0.19% slower local optimum, 85.48297 s) and guo2011 minimum energy took
+    23 to 70 iterations to the same optimum; seed 8 is the one kept.
+    """
+    scale = np.concatenate([np.ones(4), np.full(3, natural_rate(case, tf_guess)), case.torque_max])
+    offset = np.random.default_rng(8).standard_normal(rows.shape) * scale * SYMMETRY_OFFSET
+    return rows + offset
 
 
 def eigenaxis_time_guess(case: AttitudeCase) -> float:
@@ -204,278 +199,101 @@ files: factor 1 left two random slews at the iteration limit, 3 one (the same on
 did), 10 two; iteration counts otherwise within the noise of one another."""
 
 
-class QuaternionProgram:
-    """:class:`convexguid.scp.problem.NonconvexProgram` of the Hermite-Simpson transcription."""
+class QuaternionProgram(HermiteSimpsonProgram):
+    """The case stated on :mod:`convexguid.ocp` (:func:`attitude_problem`) and transcribed by its Hermite-Simpson
+    program with the torque linear between nodes; starts from ``guess`` (node rows ``[q, omega, u]``) and
+    ``tf_guess``, node constraints tightened by ``margin`` (rad)."""
 
     def __init__(self, case: AttitudeCase, intervals: int, guess: np.ndarray, tf_guess: float,
                  margin: float = 0.0) -> None:
-        self.case, self.K, self.margin = case, intervals, margin
+        self.case, self.K, self.margin, self._tf_guess = case, intervals, margin, tf_guess
         self.free_time = case.tf is None
         self.num_nodes = intervals + 1
-        self.num_variables = self.num_nodes * NODE + (1 if self.free_time else 0)
-        self._guess = np.concatenate([guess.ravel(), [tf_guess] if self.free_time else []])
-        self._tf_guess = tf_guess
-        self._f, self._jac = rigid_body_dynamics(case.inertia, case.inertia_inv)
-        self._patterns: dict[tuple[tuple[int, ...], bytes], tuple[np.ndarray, np.ndarray]] = {}
-        self.objective_scale = tf_guess if self.free_time else self._guess_energy(guess)
+        self.rate_scale = RATE_SCALE_FACTOR * natural_rate(case, tf_guess)
+        """Scale of the body rates and of their defects, rad/s (:func:`natural_rate` over the guessed duration)."""
+        guess = np.asarray(guess, dtype=float).reshape(self.num_nodes, NODE)
+        problem = attitude_problem(case, intervals, tf_guess, self.rate_scale, margin)
+        problem.initial_guess(guess[:, :NX], guess[:, NX:])
+        super().__init__(problem)
+        self.objective_scale = tf_guess if self.free_time else self._guess_energy()
 
-    # --- layout ---
+    def _guess_energy(self) -> float:
+        """Energy of the initial guess (at least 1e-3 of the energy with every torque at the largest axis bound)."""
+        select, weights = self._energy_rows
+        energy = float(weights @ (select @ self.initial_guess()) ** 2)
+        return max(energy, 1e-3 * 3 * float(np.max(self.case.torque_max))**2 * self.case.tf)
+
     def nodes(self, x: np.ndarray) -> np.ndarray:
-        return x[: self.num_nodes * NODE].reshape(self.num_nodes, NODE)
+        """Node rows ``[q, omega, u]``, shape ``(K + 1, 10)``."""
+        return np.hstack([self.states(x), self.node_controls(x)])
 
-    def final_time(self, x: np.ndarray) -> float:
-        return float(x[-1]) if self.free_time else float(self.case.tf)
+    def from_node_rows(self, x: np.ndarray) -> np.ndarray:
+        """This program's vector from node rows ``[q, omega, u]`` flattened (and :math:`t_f` last when free), the
+        layout of the IPOPT reference (:mod:`convexguid.families.quaternion_attitude.reference`)."""
+        nodes = np.asarray(x[: self.num_nodes * NODE]).reshape(self.num_nodes, NODE)
+        return self.assemble(nodes[:, :NX], nodes[:, NX:], float(x[-1]) if self.free_time else self.case.tf)
 
     def times(self, x: np.ndarray) -> np.ndarray:
         return self.case.t0 + np.linspace(0.0, self.final_time(x), self.num_nodes)
 
-    def _cols(self, node: int, part: slice) -> np.ndarray:
-        return node * NODE + np.arange(NODE)[part]
-
-    # --- NonconvexProgram ---
-    def initial_guess(self) -> np.ndarray:
-        return self._guess.copy()
-
-    @cached_property
-    def rate_scale(self) -> float:
-        """Scale of the body rates and of their defects, rad/s (:func:`natural_rate` over the guessed duration)."""
-        return RATE_SCALE_FACTOR * natural_rate(self.case, self._tf_guess)
-
-    def variable_scale(self) -> np.ndarray:
-        c = self.case
-        node = np.concatenate([np.ones(4), np.full(3, self.rate_scale), c.torque_max])
-        return np.concatenate([np.tile(node, self.num_nodes), [self._tf_guess] if self.free_time else []])
-
-    @cached_property
-    def _energy_rows(self) -> sp.csr_matrix | None:
-        """Simpson's rule for :math:`\\int|u|^2`: rows :math:`\\sqrt{h/6}\\,u_k` (twice at interior nodes) and
-        :math:`\\sqrt{4h/6}\\,(u_k + u_{k+1})/2`; weights folded into :meth:`residual_weights`."""
-        if self.free_time:
-            return None
-        rows, cols, vals = [], [], []
-        r = 0
-        for k in range(self.num_nodes):
-            for i in range(3):
-                rows.append(r + i)
-                cols.append(k * NODE + NX + i)
-                vals.append(1.0)
-            r += 3
-        for k in range(self.K):
-            for i in range(3):
-                for node in (k, k + 1):
-                    rows.append(r + i)
-                    cols.append(node * NODE + NX + i)
-                    vals.append(0.5)
-            r += 3
-        return sp.coo_matrix((vals, (rows, cols)), shape=(r, self.num_variables))
-
-    def _simpson_weights(self) -> np.ndarray:
-        h = self.case.tf / self.K
-        node_w = np.full(self.num_nodes, 2 * h / 6)
-        node_w[[0, -1]] = h / 6
-        return np.concatenate([np.repeat(node_w, 3), np.full(3 * self.K, 4 * h / 6)])
-
-    def _guess_energy(self, guess: np.ndarray) -> float:
-        """Energy of the initial guess (at least 1e-3 of the energy with every torque at the largest axis bound)."""
-        energy = float(self._simpson_weights() @ (self._energy_rows @ guess.ravel()) ** 2)
-        return max(energy, 1e-3 * 3 * float(np.max(self.case.torque_max))**2 * self.case.tf)
-
-    def residual_weights(self) -> np.ndarray:
-        return np.zeros(0) if self.free_time else self._simpson_weights()
-
-    def linear_cost(self) -> np.ndarray:
-        c = np.zeros(self.num_variables)
-        if self.free_time:
-            c[-1] = 1.0
-        return c
-
-    @cached_property
-    def _linear(self) -> LinearConstraints:
-        """Boundary conditions, and the rate and torque boxes at the nodes.
-
-        The start is the whole state :math:`(q_0, \\omega_0)`. The end is the rate and the attitude error's vector
-        part, :math:`\\operatorname{vec}(q_f^{-1} \\otimes q_K) = 0`: three rows, linear in :math:`q_K`. Fixing all four
-        components of :math:`q_K` would fix its norm as well, which the dynamics already carry from :math:`q_0`
-        (to the transcription's accuracy): one nearly dependent row, whose multiplier grows without bound as the
-        iterates converge.
-        """
-        c, n = self.case, self.num_variables
-        A = np.zeros((2 * NX - 1, n))
-        A[np.arange(NX), self._cols(0, slice(0, NX))] = 1.0
-        error = np.array([quat_multiply(quat_conjugate(c.qf), e)[:3] for e in np.eye(4)]).T
-        A[NX: NX + 3][:, self._cols(self.K, slice(0, 4))] = error
-        A[NX + 3 + np.arange(3), self._cols(self.K, slice(4, NX))] = 1.0
-        b = np.concatenate([c.q0, c.w0, np.zeros(3), c.wf])
-        # the rate and torque boxes, +-1 per row: built sparse (a dense matrix grows as the square of the nodes)
-        cols, signs, h = [], [], []
-        for k in range(self.num_nodes):
-            rate_box = ((slice(4, 7), np.full(3, c.rate_max)),) if c.rate_max is not None else ()
-            for part, bound in (*rate_box, (slice(7, 10), c.torque_max)):
-                for sign in (1.0, -1.0):
-                    cols.append(self._cols(k, part))
-                    signs.append(np.full(3, sign))
-                    h.append(bound)
-        if self.free_time:
-            cols.append([n - 1])
-            signs.append([-1.0])
-            h.append([-1e-3 * self._tf_guess])
-        cols, signs = np.concatenate(cols), np.concatenate(signs)
-        G = sp.coo_matrix((signs, (np.arange(cols.size), cols)), shape=(cols.size, n))
-        return LinearConstraints(A, b, G, np.concatenate(h))
-
-    def linear_constraints(self) -> LinearConstraints:
-        return self._linear
-
-    def output_constraints(self) -> OutputConstraints:
-        return OutputConstraints.none(0 if self.free_time else self._energy_rows.shape[0])
-
     def size(self) -> ProgramSize:
         lin = self.linear_constraints()
-        rates = 6 * self.K if self.case.rate_max is not None else 0
-        n_path = (self.num_nodes + self.K) * (len(self.case.cones) + 2 * len(self.case.forbidden)) + rates
-        return ProgramSize(self.num_variables, lin.A.shape[0] + NX * self.K, lin.G.shape[0] + n_path)
+        return ProgramSize(self.num_variables, lin.A.shape[0] + NX * self.K, lin.G.shape[0] + self.num_path)
 
-    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
-        nodes = self.nodes(x)
-        if self.free_time:
-            residuals, res_jac = np.zeros(0), sp.coo_matrix((0, self.num_variables))
-        else:
-            residuals, res_jac = self._energy_rows @ x, self._energy_rows
-        K, tf = self.K, self.final_time(x)
-        xs, us = nodes[:, :NX], nodes[:, NX:]
-        hs = hermite_simpson_defects(self._f, self._jac, xs[:-1], us[:-1], xs[1:], us[1:], np.full(K, tf / K))
-        mid = hs.midpoint
-        mid_jac = self._interval_local(mid) if jacobians else None
-        inequalities = self._cone_blocks(nodes[:, :4], mid.values[:, :4], mid_jac, jacobians)
-        inequalities += self._forbidden_blocks(nodes[:, :4], mid.values[:, :4], mid_jac, jacobians)
-        if self.case.rate_max is not None:
-            inequalities += (self._midpoint_rate_block(mid.values[:, 4:], mid_jac, jacobians),)
-        return Evaluation(residuals, res_jac if jacobians else None, inequalities, (self._defects(hs, jacobians),))
-
-    # --- constraint blocks ---
-    def _interval_local(self, parts) -> np.ndarray:
-        """Per-interval Jacobian ``(K, rows, cols)`` over [node k, node k+1, t_f] from HS partials ``parts``."""
-        blocks = [np.concatenate([parts.d_x0, parts.d_u0, parts.d_x1, parts.d_u1], axis=2)]
-        if self.free_time:
-            blocks.append(parts.d_h[:, :, None] / self.K)
-        return np.concatenate(blocks, axis=2)
-
-    @cached_property
-    def _structure(self) -> tuple[np.ndarray, np.ndarray]:
-        """Masks ``(rows, cols)`` of the entries of the per-interval defect and midpoint-state Jacobians that can
-        be nonzero.
-
-        Read from the Hermite-Simpson partials at a random point: an entry that is not identically zero is
-        nonzero there with probability one. The rate defects do not depend on the quaternions, for instance,
-        and ``q' = Omega(w) q / 2`` has no diagonal. Keeping only these entries keeps explicit zeros out of the
-        convex solver's KKT system (about a third of its factorisation time on the multi-cone case).
-        """
-        rng = np.random.default_rng(20110601)
-        K = self.K
-        xs, us = rng.standard_normal((2, K, NX)), rng.standard_normal((2, K, NU))
-        hs = hermite_simpson_defects(self._f, self._jac, xs[0], us[0], xs[1], us[1], rng.uniform(0.5, 2.0, K))
-        return (np.any(self._interval_local(hs) != 0, axis=0),
-                np.any(self._interval_local(hs.midpoint) != 0, axis=0))
-
-    def _interval_pattern(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(row, col) of the entries in ``mask`` (per-interval rows x [node k, node k+1, t_f]), every interval."""
-        key = (mask.shape, mask.tobytes())
-        if key in self._patterns:
-            return self._patterns[key]
-        c = np.concatenate([np.arange(2 * NODE), [2 * NODE] if self.free_time else []]).astype(int)
-        r_local, c_local = np.nonzero(mask)
-        offsets = np.arange(self.K)[:, None]
-        rows = (offsets * mask.shape[0] + r_local).ravel()
-        cols = np.where(c[c_local] < 2 * NODE, offsets * NODE + c[c_local], self.num_variables - 1).ravel()
-        self._patterns[key] = rows, cols
-        return self._patterns[key]
-
-    def _interval_matrix(self, local: np.ndarray, mask: np.ndarray) -> sp.coo_matrix:
-        """The per-interval Jacobians ``local`` (``(K, rows, cols)``) as a sparse matrix of the entries in ``mask``."""
-        rows, cols = self._interval_pattern(mask)
-        shape = (self.K * local.shape[1], self.num_variables)
-        return sp.coo_matrix((local[:, mask].ravel(), (rows, cols)), shape=shape)
-
-    def _quaternion_rows(self, count: int) -> np.ndarray:
-        """Mask of ``count`` rows that each combine the midpoint quaternion's partials (a cone or a dot product)."""
-        return np.repeat(np.any(self._structure[1][:4], axis=0, keepdims=True), count, axis=0)
-
-    @cached_property
-    def _defect_scale(self) -> np.ndarray:
-        return np.tile(1.0 / np.concatenate([np.ones(4), np.full(3, self.rate_scale)]), self.K)
-
-    def _defects(self, hs, jacobians: bool) -> ConstraintBlock:
-        """Hermite-Simpson defects, scaled by the state scales (quaternion 1, rate :attr:`rate_scale`)."""
-        values = hs.values.ravel() * self._defect_scale
-        jac = None
-        if jacobians:
-            jac = self._interval_matrix(self._interval_local(hs) * self._defect_scale.reshape(self.K, NX, 1),
-                                        self._structure[0])
-        return ConstraintBlock("dynamics_defects", values, jac, "scaled")
-
-    def _midpoint_rate_block(self, w_mid: np.ndarray, mid_jac: np.ndarray | None, jacobians: bool) -> ConstraintBlock:
-        """The rate box at the interval midpoints, :math:`\\pm\\omega_c/\\omega_{max} - 1 \\le 0` (nodes: hard rows)."""
-        w_max = self.case.rate_max
-        values = np.concatenate([w_mid, -w_mid], axis=1).ravel() / w_max - 1.0
-        jac = None
-        if jacobians:
-            d_w = mid_jac[:, 4:7, :] / w_max
-            rate = self._structure[1][4:7]
-            jac = self._interval_matrix(np.concatenate([d_w, -d_w], axis=1), np.concatenate([rate, rate]))
-        return ConstraintBlock("rate_midpoints", values, jac, "of rate_max")
-
-    def _forbidden_blocks(self, q: np.ndarray, q_mid: np.ndarray, mid_jac: np.ndarray | None,
-                          jacobians: bool) -> tuple[ConstraintBlock, ...]:
-        """:math:`\\pm q_b \\cdot q - \\cos((\\theta_m + m)/2) \\le 0` per forbidden attitude, nodes and midpoints.
-
-        Linear in :math:`q`, but penalized like the cones rather than hard: an initial guess may pass
-        through the forbidden attitude (the eigenaxis slew of Guo et al.'s case does), and a hard row
-        would make the first subproblem infeasible inside the trust region.
-        """
-        blocks = []
-        n1 = self.num_nodes
-        rows = np.repeat(np.arange(2 * n1), 4)
-        cols = np.tile(np.arange(n1)[:, None] * NODE + np.arange(4), (2, 1)).ravel()
-        for fb in self.case.forbidden:
-            bound = np.cos(min(np.pi, fb.min_angle + self.margin) / 2)
-            signed = np.array([1.0, -1.0])
-            values = (signed[:, None] * (q @ fb.q)[None, :]).ravel() - bound
-            values_mid = (signed[None, :] * (q_mid @ fb.q)[:, None]).ravel() - bound
-            jac = jac_mid = None
-            if jacobians:
-                jac = sp.coo_matrix((np.outer(np.repeat(signed, n1), fb.q).ravel(), (rows, cols)),
-                                    shape=(2 * n1, self.num_variables))
-                d_dot = np.einsum("j,kjc->kc", fb.q, mid_jac[:, :4, :])
-                jac_mid = self._interval_matrix(signed[None, :, None] * d_dot[:, None, :], self._quaternion_rows(2))
-            blocks.append(ConstraintBlock(f"forbidden_{fb.name}", values, jac, "cos"))
-            blocks.append(ConstraintBlock(f"forbidden_{fb.name}_midpoints", values_mid, jac_mid, "cos"))
-        return tuple(blocks)
-
-    def _cone_blocks(self, q: np.ndarray, q_mid: np.ndarray, mid_jac: np.ndarray | None,
-                     jacobians: bool) -> tuple[ConstraintBlock, ...]:
-        """Each cone at the nodes and at the interval midpoints (values in cosine units)."""
-        blocks = []
-        n1 = self.num_nodes
-        rows = np.repeat(np.arange(n1), 4)
-        cols = (np.arange(n1)[:, None] * NODE + np.arange(4)).ravel()
-        for cone in self.case.cones:
-            kind = cone.kind
-            if cone.keep_out:
-                bound, sign = np.cos(min(np.pi, cone.half_angle_rad + self.margin)), 1.0
-            else:
-                bound, sign = np.cos(max(0.0, cone.half_angle_rad - self.margin)), -1.0
-            c, grad = cone_cosine(cone, q)
-            c_mid, grad_mid = cone_cosine(cone, q_mid)
-            jac = jac_mid = None
-            if jacobians:
-                jac = sp.coo_matrix((sign * grad.ravel(), (rows, cols)), shape=(n1, self.num_variables))
-                jac_mid = self._interval_matrix(sign * np.einsum("kj,kjc->kc", grad_mid, mid_jac[:, :4, :])[:, None],
-                                                self._quaternion_rows(1))
-            blocks.append(ConstraintBlock(f"{kind}_{cone.name}", sign * (c - bound), jac, "cos"))
-            blocks.append(ConstraintBlock(f"{kind}_{cone.name}_midpoints", sign * (c_mid - bound), jac_mid, "cos"))
-        return tuple(blocks)
-
-    # --- reading a solution ---
     def torque_command(self, x: np.ndarray) -> LinearTorque:
         """Linear interpolation of the node torques (the transcription's control model); kinks at the nodes."""
-        return LinearTorque(self.times(x), self.nodes(x)[:, NX:])
+        return LinearTorque(self.times(x), self.node_controls(x))
+
+
+def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_scale: float,
+                     margin: float = 0.0) -> Problem:
+    """The slew as a :class:`convexguid.ocp.Problem` (see the module docstring): states ``q1..q4`` (scale 1),
+    ``w1..w3`` (``rate_scale``, the rate box a hard bound at the nodes), torques ``u1..u3`` (their boxes, scaled by
+    them); the final attitude as the quaternion error's vector part; each cone, forbidden attitude and the rate box
+    between nodes as path constraints tightened by ``margin``."""
+    p = Problem(case.name)
+    q = [p.state(f"q{i + 1}", initial=float(case.q0[i]), scale=1.0) for i in range(4)]
+    rate_box = None if case.rate_max is None else (-case.rate_max, case.rate_max)
+    w = [p.state(f"w{i + 1}", bounds=rate_box, initial=float(case.w0[i]), final=float(case.wf[i]), scale=rate_scale)
+         for i in range(3)]
+    u = [p.control(f"u{i + 1}", bounds=(-float(bound), float(bound)), scale=float(bound))
+         for i, bound in enumerate(case.torque_max)]
+    p.dynamics(rigid_body_dynamics(q, w, u, case.inertia))
+    # vec(q_f^-1 (x) q_K) = 0: three rows (all four components would also fix the norm, which the dynamics carry)
+    error = np.array([quat_multiply(quat_conjugate(case.qf), e)[:3] for e in np.eye(4)]).T
+    p.boundary_constraint("final_attitude", ca.mtimes(ca.DM(error), ca.vertcat(*q)), at="final")
+    attitude = ca.vertcat(*q)
+    for cone in case.cones:
+        cosine = cone_cosine_expression(attitude, cone)
+        if cone.keep_out:
+            p.path_constraint(f"{cone.kind}_{cone.name}", cosine - np.cos(min(np.pi, cone.half_angle_rad + margin)),
+                              "cos")
+        else:
+            p.path_constraint(f"{cone.kind}_{cone.name}", np.cos(max(0.0, cone.half_angle_rad - margin)) - cosine,
+                              "cos")
+    for fb in case.forbidden:
+        # linear in q, but penalized like the cones: a guess may pass through the forbidden attitude
+        bound = np.cos(min(np.pi, fb.min_angle + margin) / 2)
+        dot = ca.dot(ca.DM(fb.q), attitude)
+        p.path_constraint(f"forbidden_{fb.name}", dot - bound, "cos")
+        p.path_constraint(f"forbidden_{fb.name}_opposite", -dot - bound, "cos")
+    if case.rate_max is not None:  # the nodes hold the rate box hard; the midpoints as penalized rows
+        for i, rate in enumerate(w):
+            p.path_constraint(f"rate_{i + 1}_max", rate / case.rate_max - 1.0, "of rate_max", at_nodes=False)
+            p.path_constraint(f"rate_{i + 1}_min", -rate / case.rate_max - 1.0, "of rate_max", at_nodes=False)
+    if case.tf is None:
+        p.final_time(bounds=(1e-3 * tf_guess, None), guess=tf_guess)
+        p.minimize_time()
+    else:
+        p.final_time(fixed=case.tf)
+        p.minimize_energy()
+    p.transcription(intervals, "hermite-simpson", control="linear")
+    return p
+
+
+def cone_cosine_expression(q: ca.SX, cone: PointingCone) -> ca.SX:
+    """:func:`cone_cosine` as a CasADi expression of the quaternion ``q`` (a column of four)."""
+    b, r = ca.DM(cone.body_axis), ca.DM(cone.inertial_dir)
+    v, w = q[:3], q[3]
+    return ((w**2 - ca.dot(v, v)) * ca.dot(b, r) + 2 * ca.dot(v, b) * ca.dot(v, r)
+            - 2 * w * ca.dot(v, ca.DM(np.cross(cone.inertial_dir, cone.body_axis))))

@@ -207,6 +207,13 @@ class QuaternionAttitudeProblem(ProblemBase):
                                      key=("boundary", key),
                                      value=value.model_dump() if isinstance(value, ResultLink) else value)
         check_outside_keep_out(self.keep_out, b.initial.q, b.final.q)
+        rate_max = self.spacecraft.rate_max_degps
+        for which in ("initial", "final"):
+            rates = getattr(b, which).rate_degps
+            if rate_max is not None and max(abs(r) for r in rates) > rate_max:
+                raise spec_error(f"a component is above spacecraft.rate_max_degps = {rate_max:g}",
+                                 "a boundary rate must lie within the rate box", key=("boundary", which, "rate_degps"),
+                                 value=list(rates))
         if b.tf_s is not None:
             sc = self.spacecraft
             check_slew_time(b.tf_s, sc.inertia_matrix, sc.torque_max_vector, b.initial.q, b.initial.rate_radps,
