@@ -146,3 +146,25 @@ def test_openscvx_proximity_operation_does_not_hang_on_round_off(monkeypatch):
 def test_a_wrong_transcription_is_one_line(arguments, message):
     with pytest.raises(SpecError, match=message):
         Problem("demo").transcription(**arguments)
+
+
+def test_a_parameter_is_planned_with_the_trajectory():
+    """The farthest a rest-to-rest double integrator with |u| <= 1 goes in 2 s, the distance a parameter the plan
+    chooses (x(t_f) = d, maximise d): bang-bang, d = t_f^2 / 4 = 1 (the switch at a node of a zero-order hold)."""
+    p = Problem("farthest")
+    x = p.state("x", initial=0.0)
+    v = p.state("v", initial=0.0, final=0.0)
+    distance = p.parameter("d", bounds=(0.0, 5.0), guess=0.5)
+    u = p.control("u", bounds=(-1.0, 1.0))
+    p.dynamics({x: v, v: u})
+    p.boundary_constraint("arrive", x - distance)
+    p.final_time(fixed=2.0)
+    p.minimize_terminal(-distance)
+    p.transcription(20, "zoh")
+    solution = p.solve()
+    assert solution.ok and solution.kkt["met"], solution.message
+    assert solution.figures.parameters["d"] == pytest.approx(1.0, abs=1e-8)
+    assert solution.objective == pytest.approx(-1.0, abs=1e-8)
+    assert np.ptp(solution.dense.columns["d"]) == 0.0  # constant along the flight
+    with pytest.raises(SpecError, match=r"^farthest: dynamics: d is a parameter"):
+        p.dynamics({distance: 1.0})

@@ -95,6 +95,7 @@ class Problem:
         self.fuel_norm = 1
         self.terminal: ca.SX | None = None
         self.boundary_constraints: list[tuple[str, ca.SX, str]] = []
+        self.parameter_names: list[str] = []
         self.guess_nodes: tuple[np.ndarray, np.ndarray] | None = None
         self.control_interpolation = "quadratic"
         self.intervals = 30
@@ -132,6 +133,19 @@ class Problem:
         self.states.append(variable)
         return variable.symbol
 
+    def parameter(self, name: str, bounds: tuple[float | None, float | None] | None = None,
+                  guess: float | None = None, scale: float | None = None) -> ca.SX:
+        """A static decision parameter (a design choice the plan may set: a coast time's share, a thrust level, a
+        boundary position), usable in the dynamics, constraints and a terminal cost. Carried as a state with zero
+        rate, free at both ends (the dynamics defects keep it constant; its own bounds hold at every node), so
+        every transcription and the dense check take it as they are; it costs one value per node. Returns its
+        symbol; its planned value is in ``solution.figures.parameters``."""
+        variable = self._variable("parameter", name, bounds, None, None, scale, guess)
+        self.states.append(variable)
+        self.rates[name] = ca.SX(0)
+        self.parameter_names.append(name)
+        return variable.symbol
+
     def control(self, name: str, bounds: tuple[float | None, float | None] | None = None,
                 scale: float | None = None, guess: float | None = None) -> ca.SX:
         """A scalar control (held as a piecewise quadratic through node and midpoint values). Returns its symbol."""
@@ -163,6 +177,8 @@ class Problem:
         by_symbol = {str(v.symbol): v.name for v in self.states}
         for symbol, rate in rates.items():
             name = by_symbol.get(str(symbol))
+            if name in self.parameter_names:
+                raise SpecError(f"{self.name}: dynamics: {name} is a parameter (constant); give rates of states only")
             if name is None:
                 raise SpecError(f"{self.name}: dynamics: {symbol} is not a state of this problem "
                                 f"(states: {', '.join(by_symbol.values()) or 'none'})")

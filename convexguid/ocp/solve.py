@@ -34,11 +34,13 @@ class _Statement:
 
 @dataclass(frozen=True)
 class OcpFigures(Figures):
-    """The summary figures of a user's problem: the final time (s) and the names of its states and controls."""
+    """The summary figures of a user's problem: the final time (s), the names of its states and controls, and the
+    planned value of each parameter."""
 
     final_time_s: float | None = None
     states: tuple[str, ...] = ()
     controls: tuple[str, ...] = ()
+    parameters: dict[str, float] | None = None
 
 
 TRANSCRIPTIONS = {program.method: program
@@ -81,4 +83,6 @@ def solve_problem(problem: Problem, max_iterations: int = 100, verification_poin
     return planned_solution(_Statement(problem.name), outcome, started, size,
                             nodes=Trajectory(np.array(nodes_t), columns), dense=dense,
                             figures=OcpFigures(final_time_s=tf, states=tuple(v.name for v in problem.states),
-                                               controls=tuple(v.name for v in problem.controls)))
+                                               controls=tuple(v.name for v in problem.controls),
+                                               parameters={name: float(columns[name][0])
+                                                           for name in problem.parameter_names} or None))

@@ -285,7 +285,8 @@ class Transcription:
         if p.guess_nodes is not None and p.guess_nodes[0].shape[0] == N + 1:
             return self.assemble(p.guess_nodes[0], self.values_from_nodes(p.guess_nodes[1]), tf)
         s = np.linspace(0.0, 1.0, N + 1)[:, None]
-        start = np.array([v.initial if v.initial is not None else (v.final or 0.0) for v in p.states])
+        start = np.array([v.initial if v.initial is not None else v.final if v.final is not None else (v.guess or 0.0)
+                          for v in p.states])
         end = np.array([v.final if v.final is not None else start[i] for i, v in enumerate(p.states)])
         control = np.array([_control_guess(v) for v in p.controls])
         values = np.tile(control, (self.control_values_per_axis(), 1))
