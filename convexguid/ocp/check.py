@@ -59,11 +59,11 @@ class DenseChecker:
     def propagate(self, program: Transcription, z: np.ndarray) -> DenseTrack:
         rate = program.rate
         u = self.control(program, z)
-        tf, N = program.final_time(z), program.N
+        node_times = program.final_time(z) * program.node_shares()
         state = program.states(z)[0].copy()
         times, states = [], []
-        for k in range(N):
-            grid = np.linspace(k * tf / N, (k + 1) * tf / N, self.points + 1)
+        for k in range(program.N):
+            grid = np.linspace(node_times[k], node_times[k + 1], self.points + 1)
             run = solve_ivp(lambda t, x: np.asarray(rate(x, u(t), t)).ravel(), (grid[0], grid[-1]), state,
                             method="DOP853", t_eval=grid, rtol=1e-10, atol=1e-12)
             keep = slice(None) if k == 0 else slice(1, None)
@@ -104,8 +104,8 @@ class DenseChecker:
             # nothing broken between nodes, or the last tightening did not reduce it: the grid is too coarse
             return self._refine(program, z)
         p, track, N = program.problem, check.track, program.N
-        h = program.final_time(z) / N
-        interval = np.minimum((track.t // h).astype(int), N - 1)
+        node_times = program.final_time(z) * program.node_shares()
+        interval = np.clip(np.searchsorted(node_times, track.t, side="right") - 1, 0, N - 1)
         path, bounds, cone = program.margins.path.copy(), program.margins.bounds.copy(), program.margins.cone.copy()
         nx = program.nx
         pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
@@ -155,7 +155,7 @@ class DenseChecker:
             values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
                                                                                  strict=True)])
             share = track.t / track.t[-1]
-            nearest_node = np.abs(share * program.N - np.round(share * program.N)) < 1e-9
+            nearest_node = np.min(np.abs(share[:, None] - program.node_shares()[None, :]), axis=1) < 1e-9
             for j, c in enumerate(p.constraints):
                 inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None
                           else (share >= c.during[0] - 1e-12) & (share <= c.during[1] + 1e-12))

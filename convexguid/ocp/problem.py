@@ -1,8 +1,9 @@
 """An optimal control problem stated in Python: states, controls, a final time, dynamics, constraints, objective.
 
 A :class:`Problem` collects CasADi symbols and what the user says of them; :meth:`Problem.solve` transcribes it
-(Hermite-Simpson, :mod:`convexguid.ocp.transcription`), hands it to the SCP engine with the dense SciPy check
-(:mod:`convexguid.ocp.check`) and returns a :class:`~convexguid.solution.Solution` like every family's.
+(Hermite-Simpson, a zero- or first-order hold or the mapped Chebyshev grid), hands it to the SCP engine with the
+dense SciPy check (:mod:`convexguid.ocp.check`) and returns a :class:`~convexguid.solution.Solution` like every
+family's.
 
 What stays exact in every subproblem: bounds on states, controls and the final time, and boundary values.
 What the engine linearizes, inside its trust region and exact penalty: the dynamics defects and the path
@@ -25,9 +26,9 @@ import numpy as np
 
 from convexguid.errors import SpecError
 
-TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh")
+TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh", "chebyshev")
 """The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
-:mod:`convexguid.ocp.hold`)."""
+:mod:`convexguid.ocp.hold`, :mod:`convexguid.ocp.chebyshev`)."""
 
 
 @dataclass(frozen=True)
@@ -302,7 +303,8 @@ class Problem:
                       control: str = "quadratic") -> None:
         """``intervals`` equal intervals, transcribed by ``method``: ``"hermite-simpson"`` (collocation, the control
         quadratic between nodes through a midpoint value, or with ``control="linear"`` linear between the node
-        values), ``"zoh"`` (the control constant on each interval) or ``"foh"`` (linear between nodes); the holds
+        values), ``"zoh"`` (the control constant on each interval), ``"foh"`` (linear between nodes) or
+        ``"chebyshev"`` (pseudospectral collocation on ``intervals + 1`` mapped Chebyshev nodes); the holds
         integrate the dynamics across each interval by ``substeps`` Runge-Kutta steps."""
         where = f"{self.name}: transcription"
         if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < 2:
@@ -337,7 +339,9 @@ class Problem:
         if self.objective in ("energy", "fuel") and not self.controls:
             raise SpecError(f"{self.name}: minimize_{self.objective}: the problem has no controls")
         for c in self.constraints:
-            if c.at is not None and abs(c.at * self.intervals - round(c.at * self.intervals)) > 1e-9:
+            # (the mapped Chebyshev grid's nodes are not equally spaced: its program checks them)
+            if c.at is not None and self.method != "chebyshev" and \
+                    abs(c.at * self.intervals - round(c.at * self.intervals)) > 1e-9:
                 raise SpecError(f"{self.name}: point_constraint {c.name!r}: at = {c.at:g} of the final time is not a "
                                 f"node of the {self.intervals}-interval grid; choose intervals so that at x intervals "
                                 "is a whole number")

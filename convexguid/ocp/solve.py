@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from convexguid.ocp.chebyshev import MappedChebyshevProgram
 from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.hold import FirstOrderHoldProgram, ZeroOrderHoldProgram
@@ -44,7 +45,8 @@ class OcpFigures(Figures):
 
 
 TRANSCRIPTIONS = {program.method: program
-                  for program in (HermiteSimpsonProgram, ZeroOrderHoldProgram, FirstOrderHoldProgram)}
+                  for program in (HermiteSimpsonProgram, ZeroOrderHoldProgram, FirstOrderHoldProgram,
+                                  MappedChebyshevProgram)}
 """Every transcription by the name :meth:`~convexguid.ocp.problem.Problem.transcription` takes."""
 
 

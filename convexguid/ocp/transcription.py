@@ -147,6 +147,10 @@ class Transcription:
         """Weights of :meth:`interval_control_columns` giving the control at ``share`` of the interval."""
         raise NotImplementedError
 
+    def node_shares(self) -> np.ndarray:
+        """Each node's time as a share of the final time (equal intervals unless a subclass says otherwise)."""
+        return np.linspace(0.0, 1.0, self.N + 1)
+
     # --- layout ---------------------------------------------------------------------------------------------
     def with_margins(self, margins: Margins) -> Transcription:
         return type(self)(self.problem, margins, self.N)
