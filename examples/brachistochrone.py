@@ -13,10 +13,10 @@ G = 9.81
 
 def build(intervals: int = 30) -> Problem:
     p = Problem("brachistochrone")
-    x = p.state("x", initial=0.0, final=2.0)  # m
-    y = p.state("y", initial=0.0, final=-2.0)  # m
-    v = p.state("v", bounds=(0.0, None), initial=0.0, scale=6.0)  # m/s
-    theta = p.control("theta", bounds=(-1.5708, 3.1416), guess=1.0)  # rad from the downward vertical
+    x = p.state("x", initial=0.0, final=2.0, unit="m")
+    y = p.state("y", initial=0.0, final=-2.0, unit="m")
+    v = p.state("v", bounds=(0.0, None), initial=0.0, scale=6.0, unit="m/s")
+    theta = p.control("theta", bounds=(-1.5708, 3.1416), guess=1.0, unit="rad")  # from the downward vertical
     p.dynamics({x: v * ca.sin(theta), y: -v * ca.cos(theta), v: G * ca.cos(theta)})
     p.final_time(bounds=(0.1, 5.0), guess=1.0)
     p.minimize_time()

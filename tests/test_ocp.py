@@ -56,6 +56,7 @@ def test_the_brachistochrone_is_the_cycloid():
     exact = cycloid_time(2.0, 2.0, brachistochrone.G)
     assert solution.figures.final_time_s == pytest.approx(exact, rel=1e-5)
     assert solution.summary()["final_time_s"] == solution.figures.final_time_s
+    assert solution.summary()["units"] == {"x": "m", "y": "m", "v": "m/s", "theta": "rad"}
 
 
 @pytest.mark.parametrize("intervals", [10, 20, 60])

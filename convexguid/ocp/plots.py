@@ -20,10 +20,12 @@ def plot_ocp(solution: Solution, out_dir: Path) -> list[Path]:
         if not names:
             continue
         fig, ax = plt.subplots(figsize=(7, 4))
+        units = solution.figures.units or {}
         for name in names:
-            line = ax.plot(dense.t, dense.columns[name], label=name)[0] if dense is not None else None
+            label = f"{name} [{units[name]}]" if name in units else name
+            line = ax.plot(dense.t, dense.columns[name], label=label)[0] if dense is not None else None
             ax.plot(nodes.t, nodes.columns[name], "o", ms=3, color=line.get_color() if line else None,
-                    label=None if line else name)
+                    label=None if line else label)
         paths.append(save_figure(fig, ax, f"{solution.problem}: {title} (lines: dense re-propagation, dots: nodes)",
                                  "value (each in its own unit)", out_dir / f"{title}.png"))
     return paths

@@ -43,6 +43,7 @@ class Variable:
     final: float | None
     scale: float
     guess: float | None
+    unit: str = ""
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,7 @@ class Problem:
         self.time = ca.SX.sym("t")
 
     # --- declarations -----------------------------------------------------------------------------------------
-    def _variable(self, kind: str, name: str, bounds, initial, final, scale, guess) -> Variable:
+    def _variable(self, kind: str, name: str, bounds, initial, final, scale, guess, unit: str = "") -> Variable:
         where = f"{self.name}: {kind} {name!r}"
         if not isinstance(name, str) or not name.isidentifier():
             raise SpecError(f"{self.name}: {kind} name: expected an identifier (got {name!r})")
@@ -124,33 +125,36 @@ class Problem:
         scale = _number(f"{where}: scale", scale) or max([*magnitudes, 0.0]) or 1.0
         if scale <= 0:
             raise SpecError(f"{where}: scale: must be positive (got {scale:g})")
+        if not isinstance(unit, str):
+            raise SpecError(f"{where}: unit: expected a string such as 'm/s' (got {unit!r})")
         return Variable(name, ca.SX.sym(name), lower, upper, initial, final, scale,
-                        _number(f"{where}: guess", guess))
+                        _number(f"{where}: guess", guess), unit)
 
     def state(self, name: str, bounds: tuple[float | None, float | None] | None = None, initial: float | None = None,
-              final: float | None = None, scale: float | None = None) -> ca.SX:
-        """A scalar state; ``initial``/``final`` fix its boundary values (None: free). Returns its symbol."""
-        variable = self._variable("state", name, bounds, initial, final, scale, None)
+              final: float | None = None, scale: float | None = None, unit: str = "") -> ca.SX:
+        """A scalar state in ``unit``; ``initial``/``final`` fix its boundary values (None: free). Returns its
+        symbol."""
+        variable = self._variable("state", name, bounds, initial, final, scale, None, unit)
         self.states.append(variable)
         return variable.symbol
 
     def parameter(self, name: str, bounds: tuple[float | None, float | None] | None = None,
-                  guess: float | None = None, scale: float | None = None) -> ca.SX:
+                  guess: float | None = None, scale: float | None = None, unit: str = "") -> ca.SX:
         """A static decision parameter (a design choice the plan may set: a coast time's share, a thrust level, a
         boundary position), usable in the dynamics, constraints and a terminal cost. Carried as a state with zero
         rate, free at both ends (the dynamics defects keep it constant; its own bounds hold at every node), so
         every transcription and the dense check take it as they are; it costs one value per node. Returns its
         symbol; its planned value is in ``solution.figures.parameters``."""
-        variable = self._variable("parameter", name, bounds, None, None, scale, guess)
+        variable = self._variable("parameter", name, bounds, None, None, scale, guess, unit)
         self.states.append(variable)
         self.rates[name] = ca.SX(0)
         self.parameter_names.append(name)
         return variable.symbol
 
     def control(self, name: str, bounds: tuple[float | None, float | None] | None = None,
-                scale: float | None = None, guess: float | None = None) -> ca.SX:
-        """A scalar control (held as a piecewise quadratic through node and midpoint values). Returns its symbol."""
-        variable = self._variable("control", name, bounds, None, None, scale, guess)
+                scale: float | None = None, guess: float | None = None, unit: str = "") -> ca.SX:
+        """A scalar control (between nodes as the transcription holds it), in ``unit``. Returns its symbol."""
+        variable = self._variable("control", name, bounds, None, None, scale, guess, unit)
         self.controls.append(variable)
         return variable.symbol
 

@@ -35,13 +35,14 @@ class _Statement:
 
 @dataclass(frozen=True)
 class OcpFigures(Figures):
-    """The summary figures of a user's problem: the final time (s), the names of its states and controls, and the
-    planned value of each parameter."""
+    """The summary figures of a user's problem: the final time (s), the names of its states and controls, the
+    planned value of each parameter, and the units the problem gave its variables."""
 
     final_time_s: float | None = None
     states: tuple[str, ...] = ()
     controls: tuple[str, ...] = ()
     parameters: dict[str, float] | None = None
+    units: dict[str, str] | None = None
 
 
 TRANSCRIPTIONS = {program.method: program
@@ -87,4 +88,6 @@ def solve_problem(problem: Problem, max_iterations: int = 100, verification_poin
                             figures=OcpFigures(final_time_s=tf, states=tuple(v.name for v in problem.states),
                                                controls=tuple(v.name for v in problem.controls),
                                                parameters={name: float(columns[name][0])
-                                                           for name in problem.parameter_names} or None))
+                                                           for name in problem.parameter_names} or None,
+                                               units={v.name: v.unit for v in (*problem.states, *problem.controls)
+                                                      if v.unit} or None))
