@@ -110,7 +110,11 @@ class DenseChecker:
         nx = program.nx
         pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
         excess_by_name = self._excess(program, track)
+        broken_equality = False
         for name, excess in excess_by_name.items():
+            if name[0] == "path" and p.constraints[name[1]].equality:
+                broken_equality |= bool(np.any(excess > PATH_TOLERANCE))
+                continue  # an equality cannot be tightened: only a finer grid helps
             for k in np.unique(interval[excess > PATH_TOLERANCE]):
                 worst = float(excess[interval == k].max())
                 margin = grown_margin(worst, attempt, MARGIN_FLOOR)
@@ -129,7 +133,8 @@ class DenseChecker:
                     bounds[[node * nx + state for node in nodes]] += margin
         old = program.margins
         if all(np.array_equal(a, b) for a, b in ((path, old.path), (bounds, old.bounds), (cone, old.cone))):
-            return None
+            # nothing to tighten: a broken path equality asks for a finer grid; anything else stays broken
+            return self._refine(program, z) if broken_equality else None
         largest = max(path.max(initial=0.0), bounds.max(initial=0.0), cone.max(initial=0.0))
         return Repair(program.with_margins(Margins(path, bounds, worst_now, cone)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
@@ -159,7 +164,8 @@ class DenseChecker:
             for j, c in enumerate(p.constraints):
                 inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None
                           else (share >= c.during[0] - 1e-12) & (share <= c.during[1] + 1e-12))
-                out[("path", j)] = np.where(inside, values[:, j], -np.inf)
+                excess = np.abs(values[:, j]) if c.equality else values[:, j]
+                out[("path", j)] = np.where(inside, excess, -np.inf)
         for i, v in enumerate(p.states):
             if v.upper is not None:
                 out[("bound", (i, True))] = track.x[:, i] - v.upper

@@ -56,6 +56,8 @@ class PathConstraint:
     unit: str
     during: tuple[float, float] = (0.0, 1.0)
     at: float | None = None
+    equality: bool = False
+    """``expression == 0`` instead (a path equality: linearized like the inequalities, never tightened)."""
     at_nodes: bool = True
     """False: imposed between the nodes only (Hermite-Simpson's midpoints), for a bound the nodes hold hard."""
     cone: tuple[ca.SX, ca.SX] | None = None
@@ -206,6 +208,14 @@ class Problem:
             raise SpecError(f"{where}: during: expected (start, end) with 0 <= start < end <= 1, shares of the final "
                             f"time (got {during!r})")
         self.constraints.append(PathConstraint(name, expression, unit, window, at_nodes=bool(at_nodes)))
+
+    def path_equality(self, name: str, expression: ca.SX, unit: str = "",
+                      during: tuple[float, float] | None = None) -> None:
+        """``expression == 0`` along the trajectory (or the share ``during`` of it), e.g. a thrust of fixed
+        magnitude; nonconvex allowed (the engine linearizes it). The dense check judges ``|expression|`` between
+        the nodes; where it breaks there the repair refines the grid (an equality cannot be tightened)."""
+        self.path_constraint(name, expression, unit, during)
+        self.constraints[-1] = replace(self.constraints[-1], equality=True)
 
     def cone_constraint(self, name: str, vector, bound, unit: str = "",
                         during: tuple[float, float] | None = None) -> None:

@@ -198,7 +198,8 @@ class Transcription:
         g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
         self.path_rows: list[tuple[str, int, int]] = []  # (node or mid, index, constraint) of each path row
         self.cone_rows: list[tuple[str, int, int]] = []  # the same for each stated cone where it holds
-        constraints, cones = [], []
+        self.equality_rows: list[tuple[str, int, int]] = []  # and for each path equality
+        constraints, cones, equalities = [], [], []
         cone_maps = {j: ca.Function(f"cone_{j}", [x, u], [ca.vertcat(*c.cone)]) for j, c in enumerate(p.constraints)
                      if c.cone is not None}
 
@@ -206,7 +207,10 @@ class Transcription:
             for j, c in enumerate(p.constraints):
                 if not c.applies(share, kind == "node"):
                     continue
-                if c.cone is None:
+                if c.equality:
+                    self.equality_rows.append((kind, k, j))
+                    equalities.append(g[j](state, control, time))
+                elif c.cone is None:
                     self.path_rows.append((kind, k, j))
                     constraints.append(g[j](state, control, time))
                 elif kind == "node":  # a cone is affine in the node's values only
@@ -215,10 +219,14 @@ class Transcription:
 
         defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
+        path_equalities = ca.vertcat(*equalities) if equalities else ca.SX(0, 1)
         self.num_path = path.shape[0]
+        self._path_equalities = ca.Function("path_equalities", [z], [path_equalities,
+                                                                      ca.jacobian(path_equalities, z)])
+        self._path_equality_pattern = _Pattern(ca.jacobian(path_equalities, z).sparsity())
         self._build_cones(z, V, cones)
         objective = self._epigraph(z, X[:, N], tf) if self.epigraph else ca.SX(0, 1)
-        self._symbols = (z, defect, path, objective)
+        self._symbols = (z, ca.vertcat(defect, path_equalities), path, objective)
         self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
         self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
         self._objective_epigraph = ca.Function("epigraph", [z], [objective, ca.jacobian(objective, z)])
@@ -441,6 +449,10 @@ class Transcription:
             residual_jacobian = select if jacobians else None
         equalities = (ConstraintBlock("dynamics_defects", np.asarray(defect, dtype=float).ravel(),
                                       self._defect_pattern.coo(defect_jac) if jacobians else None, "scaled state"),)
+        if self.equality_rows:
+            value, jacobian = self._path_equalities(z)
+            equalities += (ConstraintBlock("path_equalities", np.asarray(value, dtype=float).ravel(),
+                                           self._path_equality_pattern.coo(jacobian) if jacobians else None),)
         inequalities = ()
         if self.num_path:
             values = np.asarray(path, dtype=float).ravel() + self.margins.path
