@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
 from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
@@ -105,7 +106,7 @@ class Transcription:
         self.slacks_per_value = self.nu if self.fuel_norm == 1 else 1
         self.num_slacks = self.control_values_per_axis() * self.slacks_per_value if self.fuel else 0
         self.epigraph = (self.fuel and self.free_time) or (problem.objective == "terminal"
-                                                          and not _affine_with_no_offset(self, problem))
+                                                          and not terminal_cost_is_linear(problem))
         self.num_variables = self.slack_start + self.num_slacks + int(self.epigraph) + int(self.free_time)
         self._build()
         self.margins = margins if margins is not None else Margins.none(self.num_path, (self.N + 1) * self.nx,
@@ -315,7 +316,7 @@ class Transcription:
                          else np.full(per_axis, float(np.linalg.norm(controls))))
         if self.epigraph:
             horizon = self.problem.tf_guess if self.free_time else self.problem.tf
-            parts.append([max(horizon * float(controls.sum()), 1e-6) if self.fuel else _terminal_scale(self)])
+            parts.append([max(horizon * float(controls.sum()), 1e-6) if self.fuel else terminal_scale(self)])
         if self.free_time:
             parts.append([max(self.problem.tf_guess, 1e-6)])
         return np.concatenate(parts)
@@ -342,7 +343,7 @@ class Transcription:
             cost[self.slack_start: self.slack_start + self.num_slacks] = self.problem.tf / self.N * \
                 self._slack_weights
         elif self.problem.objective == "terminal":
-            cost += _terminal_gradient(self)
+            cost += terminal_gradient(self)
         return cost
 
     def linear_constraints(self) -> LinearConstraints:
@@ -485,36 +486,3 @@ def _control_guess(v) -> float:
     if v.lower is not None and v.upper is not None:
         return 0.5 * (v.lower + v.upper)
     return 0.0
-
-
-def _terminal_symbols(program: Transcription) -> tuple[ca.SX, ca.SX]:
-    """The terminal cost as an expression of ``z`` (the final node's states and the final time), and ``z``."""
-    z = ca.SX.sym("z", program.num_variables)
-    final_state = z[program.control_start - program.nx: program.control_start]
-    tf = z[-1] if program.free_time else program.problem.tf
-    return program._terminal_function(final_state, tf), z
-
-
-def _affine_with_no_offset(program: Transcription, problem: Problem) -> bool:
-    """Whether the terminal cost is ``c^T z`` exactly (then a linear cost; else an epigraph). Called before the
-    layout is final: it lays the final node and the final time out as the full layout will."""
-    state, time = problem.state_vector(), problem.time
-    expression = problem.terminal
-    variables = ca.vertcat(state, time)
-    jacobian = ca.jacobian(expression, variables)
-    offset = ca.substitute(expression, variables, ca.DM.zeros(variables.shape[0]))
-    return (not ca.depends_on(jacobian, variables) and float(ca.evalf(offset)) == 0.0
-            and (program.free_time or not ca.depends_on(expression, time)))
-
-
-def _terminal_gradient(program: Transcription) -> np.ndarray:
-    expression, z = _terminal_symbols(program)
-    return np.asarray(ca.evalf(ca.substitute(ca.jacobian(expression, z), z, ca.DM.zeros(z.shape[0])))).ravel()
-
-
-def _terminal_scale(program: Transcription) -> float:
-    """A magnitude for the terminal cost's epigraph variable: its size at the guess's final state."""
-    p = program.problem
-    final = np.array([v.final if v.final is not None else (v.initial or 0.0) for v in p.states])
-    tf = p.tf_guess if program.free_time else p.tf
-    return max(abs(program._terminal_value(final, tf)), 1e-6)

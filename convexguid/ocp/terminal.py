@@ -1,0 +1,47 @@
+"""The terminal cost :math:`\\phi(x_N, t_f)` of a transcribed problem: whether it is a linear cost, its gradient,
+and a magnitude for its epigraph variable when it is not."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import casadi as ca
+import numpy as np
+
+if TYPE_CHECKING:  # the transcription imports this module
+    from convexguid.ocp.problem import Problem
+    from convexguid.ocp.transcription import Transcription
+
+
+def _terminal_symbols(program: Transcription) -> tuple[ca.SX, ca.SX]:
+    """The terminal cost as an expression of ``z`` (the final node's states and the final time), and ``z``."""
+    z = ca.SX.sym("z", program.num_variables)
+    final_state = z[program.control_start - program.nx: program.control_start]
+    tf = z[-1] if program.free_time else program.problem.tf
+    return program._terminal_function(final_state, tf), z
+
+
+def terminal_cost_is_linear(problem: Problem) -> bool:
+    """Whether the terminal cost is ``c^T z`` exactly, affine in the final state (and the final time when it is
+    free) with no constant part: then a linear cost, else an epigraph."""
+    state, time = problem.state_vector(), problem.time
+    expression = problem.terminal
+    variables = ca.vertcat(state, time)
+    jacobian = ca.jacobian(expression, variables)
+    offset = ca.substitute(expression, variables, ca.DM.zeros(variables.shape[0]))
+    return (not ca.depends_on(jacobian, variables) and float(ca.evalf(offset)) == 0.0
+            and (problem.free_time or not ca.depends_on(expression, time)))
+
+
+def terminal_gradient(program: Transcription) -> np.ndarray:
+    """The linear cost ``c`` of a terminal cost :func:`terminal_cost_is_linear` said is ``c^T z``."""
+    expression, z = _terminal_symbols(program)
+    return np.asarray(ca.evalf(ca.substitute(ca.jacobian(expression, z), z, ca.DM.zeros(z.shape[0])))).ravel()
+
+
+def terminal_scale(program: Transcription) -> float:
+    """A magnitude for the terminal cost's epigraph variable: its size at the guess's final state."""
+    p = program.problem
+    final = np.array([v.final if v.final is not None else (v.initial or 0.0) for v in p.states])
+    tf = p.tf_guess if program.free_time else p.tf
+    return max(abs(program._terminal_value(final, tf)), 1e-6)
