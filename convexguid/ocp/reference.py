@@ -3,6 +3,7 @@ user's problem is checked against (tests/test_ocp.py)."""
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import casadi as ca
@@ -20,12 +21,17 @@ class IpoptAnswer:
     objective: float
     z: np.ndarray
     status: str
+    setup_s: float = 0.0
+    """CasADi's building of the NLP and of IPOPT's interface (its exact Hessian included), s."""
+    solve_s: float = 0.0
+    iterations: int = 0
 
 
 def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: float = 1e-10) -> IpoptAnswer:
     """Minimise the program's objective (linear cost plus weighted squared residuals) subject to its defects, path
     constraints (with their margins), cones, objective epigraph and linear constraints, from ``z0``
     (default: its guess)."""
+    started = time.perf_counter()
     z = ca.SX.sym("z", program.num_variables)
     objective = ca.dot(ca.DM(program.linear_cost()), z)
     weights = program.residual_weights()
@@ -57,7 +63,10 @@ def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: 
     solver = ca.nlpsol("ipopt", "ipopt", {"x": z, "f": objective, "g": g},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tol,
                         "ipopt.constr_viol_tol": 1e-9})
+    setup_s = time.perf_counter() - started
+    started = time.perf_counter()
     result = solver(x0=program.initial_guess() if z0 is None else z0, lbg=lbg, ubg=ubg)
+    solve_s = time.perf_counter() - started
     stats = solver.stats()
     return IpoptAnswer(bool(stats["success"]), float(result["f"]), np.asarray(result["x"]).ravel(),
-                       str(stats["return_status"]))
+                       str(stats["return_status"]), setup_s, solve_s, int(stats.get("iter_count", 0)))
