@@ -78,20 +78,21 @@ def test_the_brachistochrone_does_not_hang_on_round_off(monkeypatch):
     assert max(times) - min(times) <= 1e-9 * times[0]
 
 
-def _double_integrator() -> Problem:
+def double_integrator(method: str = "hermite-simpson", intervals: int = 10, duration: float = 1.0) -> Problem:
+    """Rest to rest over 1 m at minimum energy in ``duration`` seconds (also used by tests/test_ocp_holds.py)."""
     p = Problem("double-integrator")
     x = p.state("x", initial=0.0, final=1.0)
     v = p.state("v", initial=0.0, final=0.0)
     u = p.control("u")
     p.dynamics({x: v, v: u})
-    p.final_time(fixed=1.0)
+    p.final_time(fixed=duration)
     p.minimize_energy()
-    p.transcription(10)
+    p.transcription(intervals, method)
     return p
 
 
 def test_minimum_energy_rest_to_rest_is_the_closed_form():
-    solution = _double_integrator().solve()
+    solution = double_integrator().solve()
     assert solution.ok, solution.message
     assert solution.objective == pytest.approx(12.0, rel=1e-8)  # J = integral of (6 - 12 t)^2 over [0, 1]
     t = solution.nodes.t
@@ -163,7 +164,7 @@ def test_an_incomplete_problem_is_refused_before_the_solve():
     p.dynamics({x: 1.0})
     with pytest.raises(SpecError, match=r"^demo: dynamics: no rate given for state\(s\) v$"):
         p.solve()
-    q = _double_integrator()
+    q = double_integrator()
     q.path_constraint("uses_unknown", ca.SX.sym("w") - 1.0)
     with pytest.raises(SpecError, match=r"^double-integrator: path_constraint 'uses_unknown': uses w"):
         q.solve()
@@ -221,7 +222,7 @@ def test_a_constraint_over_part_of_the_maneuver_and_at_one_instant():
     """Rest to rest over 1 m in 1 s at minimum energy, kept below 0.3 m over the first half and at or beyond
     0.45 m at half time: the window and the instant are imposed there only (the free optimum passes 0.5 m at half
     time and crosses 0.3 m in the first half)."""
-    p = _double_integrator()
+    p = double_integrator()
     x = p.states[0].symbol
     p.path_constraint("low_first_half", x - 0.3, "m", during=(0.0, 0.4))
     p.point_constraint("far_at_half_time", 0.45 - x, at=0.5, unit="m")
@@ -237,7 +238,7 @@ def test_a_constraint_over_part_of_the_maneuver_and_at_one_instant():
 
 
 def test_a_point_constraint_off_the_grid_is_refused():
-    p = _double_integrator()
+    p = double_integrator()
     p.point_constraint("halfway", p.states[0].symbol - 0.4, at=0.33)
     with pytest.raises(SpecError, match=r"point_constraint 'halfway': at = 0.33 of the final time is not a node"):
         p.solve()

@@ -37,15 +37,9 @@ def _proxops():
 
 
 def _double_integrator(method: str, intervals: int = 8) -> Problem:
-    p = Problem("double-integrator")
-    x = p.state("x", initial=0.0, final=1.0)
-    v = p.state("v", initial=0.0, final=0.0)
-    u = p.control("u")
-    p.dynamics({x: v, v: u})
-    p.final_time(fixed=2.0)
-    p.minimize_energy()
-    p.transcription(intervals, method=method)
-    return p
+    from test_ocp import double_integrator
+
+    return double_integrator(method, intervals, duration=2.0)
 
 
 @pytest.mark.parametrize("method", ["zoh", "foh"])
