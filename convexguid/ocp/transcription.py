@@ -249,7 +249,9 @@ class Transcription:
         stacked = ca.vertcat(*parts)
         jacobian = ca.jacobian(stacked, z)
         constant = ca.Function("cone_map", [z], [jacobian, stacked])(np.zeros(self.num_variables))
-        self._cone_map = (_Pattern(jacobian.sparsity()).coo(constant[0]).tocsr(), np.asarray(constant[1]).ravel())
+        # the map is affine: its matrix, in both the forms an evaluation needs, is built here once
+        W = _Pattern(jacobian.sparsity()).coo(constant[0])
+        self._cone_map = (W.tocsr(), W, np.asarray(constant[1]).ravel())
         firsts = np.concatenate([[0], np.cumsum(self.cone_sizes)[:-1]]).astype(int)
         self._cone_first_rows = firsts[: len(stated)]
 
@@ -465,10 +467,10 @@ class Transcription:
                                              self._epigraph_pattern.coo(jacobian) if jacobians else None),)
         cones = ()
         if self._cone_map is not None:
-            W, offset = self._cone_map
+            W, W_coo, offset = self._cone_map
             values = W @ z + offset
             values[self._cone_first_rows] -= self.margins.cone
-            cones = (ConeBlock("cone_constraints", values, W.tocoo() if jacobians else None, self.cone_sizes),)
+            cones = (ConeBlock("cone_constraints", values, W_coo if jacobians else None, self.cone_sizes),)
         return Evaluation(residuals, residual_jacobian, inequalities, equalities, cones)
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
