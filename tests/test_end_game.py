@@ -67,11 +67,19 @@ def test_hs071_end_game_reaches_the_optimum_with_default_settings(backend):
     first_order = solve_scp(HS071Epigraph(), SCPSettings(backend=backend, second_order=False))
     newton = solve_scp(HS071Epigraph(), SCPSettings(backend=backend))
     assert newton.status == "converged" and newton.kkt["met"], newton.message
-    assert np.max(np.abs(newton.x[:4] - HS071_X)) < 1e-6
+    assert np.max(np.abs(newton.x[:4] - HS071_X)) < 1e-5  # KKT residuals within 1e-6 of the objective
     assert np.max(np.abs(first_order.x[:4] - HS071_X)) > 1e-4  # the linear end game stops short
-    assert not first_order.kkt["met"] and "KKT residuals above tolerance" in first_order.message
+    # ... and says it is not proved optimal
+    assert first_order.status == "unverified" and not first_order.kkt["met"]
+    assert "KKT residuals above tolerance" in first_order.message
     assert newton.iterations < first_order.iterations
     assert any(r.solver_status == "newton" for r in newton.history)
+    # Newton's convergence is quadratic: a thousand times tighter costs no more iterations (HS071_X itself is given
+    # to 1e-7 or so)
+    tight = solve_scp(HS071Epigraph(), SCPSettings(backend=backend, kkt_tolerance=1e-9, feasibility_tolerance=1e-9))
+    assert tight.status == "converged" and tight.kkt["stationarity_relative"] < 1e-11
+    assert tight.iterations <= newton.iterations + 1
+    assert np.max(np.abs(tight.x[:4] - HS071_X)) < 1e-6
 
 
 class SymmetricSaddle(_SmallProgram):
@@ -144,8 +152,13 @@ def test_a_generous_or_absent_rate_bound_gives_the_same_slew(rate_max):
 
 
 def test_betts_asymmetric_slew_reaches_the_published_minimum_time():
-    """Betts (2010, p. 299): 28.6304 s; 50 Hermite-Simpson intervals, no rate bound, from the eigenaxis guess."""
+    """Betts (2010, p. 299): 28.6304 s; 50 Hermite-Simpson intervals, no rate bound, from the eigenaxis guess.
+
+    Within 30 SCP iterations (issue 19; measured 13-14: the penalty weight follows the multipliers, so the ratio
+    test no longer holds the trust region at a few hundredths while the final time comes down from 42 s).
+    """
     sol = solve(PROBLEMS / "betts_asymmetric_slew.yaml")
     assert sol.ok, sol.message
     assert sol.figures.maneuver_time_s == pytest.approx(28.6304, rel=5e-4)
     assert sol.summary()["kkt"]["met"]
+    assert sol.iterations <= 30

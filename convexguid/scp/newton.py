@@ -10,11 +10,10 @@ equality-constrained quadratic step on that subproblem's working set:
   twice at most; when one is still broken, the working set is not settled and no step is proposed);
 * inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one,
   freed by a good whole one), and the first-order one;
-* judged by the merit function with the penalty weight at most :data:`PENALTY_OVER_MULTIPLIERS`
-  times the largest multiplier, but never below the run's starting weight: any weight above the
-  multipliers makes the penalty exact, and a far larger one (an escalation that has served its
-  purpose) only magnifies the curvature error of a long step (Nocedal & Wright, *Numerical
-  Optimization*, 2nd ed., Sec. 18.3);
+* judged by the merit function with the penalty weight at most the one that follows the multipliers
+  (:meth:`~convexguid.scp.policies.PenaltyPolicy.following`): any weight above the multipliers makes the
+  penalty exact, and a far larger one (an escalation that has served its purpose) only magnifies the
+  curvature error of a long step (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 18.3);
 * with a least-norm second-order correction when its ratio is poor (the Maratos effect).
 
 The engine takes it only if its ratio passes and it does at least as well as the first-order step
@@ -34,9 +33,6 @@ from convexguid.scp.problem import Evaluation
 if TYPE_CHECKING:
     from convexguid.scp.engine import SCPAlgorithm
     from convexguid.scp.state import IterationState
-
-PENALTY_OVER_MULTIPLIERS = 10.0
-"""Newton's step is judged with a penalty weight at most this many times the largest multiplier."""
 
 BOUND_ROUNDS = 2
 """Times the working set may grow by the hard bounds a Newton step breaks before the step is cut short."""
@@ -87,8 +83,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     whole = length <= radius
     if length > radius:
         newton = replace(newton, step=newton.step * (radius / length))
-    floor = algo.penalty.initial(algo.objective_at_start)
-    rho = min(state.penalty, max(PENALTY_OVER_MULTIPLIERS * state.multipliers.largest(), floor))
+    rho = min(state.penalty, algo.penalty.following(state.multipliers.largest(), algo.objective_at_start))
     merit = algo.merit(state.ev, state.x, rho)
     d = newton.step * algo.scale
     predicted = merit - (state.objective + model.quadratic(newton.step)

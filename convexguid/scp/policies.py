@@ -56,20 +56,32 @@ class TrustRegionPolicy:
 
 @dataclass(frozen=True)
 class PenaltyPolicy:
-    """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty, and its escalation.
+    """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty: where it starts, how it follows the multipliers, and
+    its escalation.
 
     With ``unit = "objective"`` the configured weights are counted in units of
     :math:`|f(x_0)|`, the objective at the start point: a weight of 30 then means "30 times
     the start's maneuver time (or energy) per unit of constraint violation", whatever the
-    problem's scale. With ``unit = "absolute"`` they are used as given. An exact penalty needs
-    a weight above the constraint multipliers; when the iterates stall infeasible the weight is
-    multiplied by ``factor`` up to its maximum (Nocedal & Wright, Sec. 17.2).
+    problem's scale. With ``unit = "absolute"`` they are used as given.
+
+    The penalty is exact for any weight above the largest multiplier :math:`\\|\\lambda\\|_\\infty` (Nocedal & Wright,
+    *Numerical Optimization*, 2nd ed., Thm. 17.3); a weight far above it only makes the merit function count
+    the linearization error of every step as a large loss, so the ratio test holds the trust region small.
+    Near a feasible point the weight therefore follows the multipliers the last subproblem reported: brought down
+    to :attr:`over_multipliers` times the largest whenever it is more than :attr:`slack` times that (never below
+    :attr:`floor` of the starting weight, and not when every multiplier is below :attr:`inactive` of the weight: a
+    subproblem with every constraint inactive says nothing of the weight the next one needs). When the iterates
+    stall infeasible it is multiplied by ``factor`` up to its maximum (Nocedal & Wright, Sec. 17.2).
     """
 
     start: float
     maximum: float
     unit: str
     factor: float = 10.0
+    over_multipliers: float = 3.0
+    slack: float = 2.0
+    floor: float = 1e-3
+    inactive: float = 1e-6
 
     @classmethod
     def from_settings(cls, s: SCPSettings) -> PenaltyPolicy:
@@ -81,6 +93,18 @@ class PenaltyPolicy:
 
     def initial(self, objective_at_start: float) -> float:
         return self.start * self.scale(objective_at_start)
+
+    def following(self, largest_multiplier: float, objective_at_start: float) -> float:
+        """The weight that follows the multipliers: :attr:`over_multipliers` times the largest, at least the floor."""
+        return max(self.over_multipliers * largest_multiplier, self.floor * self.initial(objective_at_start))
+
+    def relaxed(self, rho: float, largest_multiplier: float, objective_at_start: float) -> float | None:
+        """The weight :meth:`following` the multipliers if ``rho`` is more than :attr:`slack` times it, else None
+        (also when no constraint is active: the largest multiplier below :attr:`inactive` times ``rho``)."""
+        if largest_multiplier < self.inactive * rho:
+            return None
+        target = self.following(largest_multiplier, objective_at_start)
+        return target if rho > self.slack * target else None
 
     def escalated(self, rho: float, objective_at_start: float) -> float | None:
         """The next weight, or ``None`` if ``rho`` is already at the maximum."""
