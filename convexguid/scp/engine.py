@@ -20,18 +20,18 @@ start point into an :class:`~convexguid.scp.state.IterationState`, and each
 5. stop, or raise the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) when the
    iterates stall with constraints violated.
 
-The objective's residuals are linearized (Gauss-Newton). From the second iteration on, the model
-also carries the curvature of the Lagrangian, weighted by the multipliers of the previous
-subproblem and made convex on the directions the active constraints leave free
-(:mod:`convexguid.scp.lagrangian`): an S :math:`\\ell_1` QP step (Fletcher 1985) whose end game is
-Newton's, where a linear model alone would crawl at a linear rate whenever the optimum is not a vertex.
+The objective's residuals are linearized (Gauss-Newton); a program may add a convex diagonal of the
+Lagrangian's curvature (``lagrangian_curvature``, weighted by the previous subproblem's multipliers: an
+S :math:`\\ell_1` QP step, Fletcher 1985). Near a feasible point the end game (:mod:`convexguid.scp.newton`)
+also proposes Newton's step on the working set the subproblems agree on, with the exact Hessian of the
+Lagrangian, where a linear model alone would crawl at a linear rate whenever the optimum is not a vertex.
 
-Statuses: ``converged`` when the KKT conditions hold at a feasible iterate (:mod:`convexguid.scp.kkt`,
-stationarity and complementarity relative to the objective within ``kkt_tolerance``), or when the
-scaled step or the predicted decrease falls below ``tolerance`` there (the KKT residuals are then
-reported, and named in the message when above their tolerance); in both cases only if the reduced
-Hessian shows no direction of negative curvature (a stationary point with one is a saddle: the
-engine steps off it along that direction and goes on, :data:`MAX_ESCAPES` times at most);
+Statuses (:mod:`convexguid.scp.optimality`): ``converged`` only when the KKT conditions hold at a feasible
+iterate (:mod:`convexguid.scp.kkt`, stationarity and complementarity relative to the objective within
+``kkt_tolerance``), with the multipliers of the subproblem that led to it or of the one solved there, and the
+reduced Hessian shows no direction of negative curvature (a stationary point with one is a saddle: the engine
+steps off it along that direction and goes on, twice at most); ``unverified`` when the steps become small at a
+feasible point whose KKT residuals stay above tolerance (the message names them);
 ``infeasible`` only with a certificate: the hard linear constraints admit no point (an
 elastic LP, :func:`~convexguid.scp.restoration.restore_start`), or the elastic phase-1 problem
 (:class:`~convexguid.scp.restoration.ElasticPhase1`), run when the iterates stall infeasible at
@@ -54,9 +54,9 @@ from convexguid.scp.assembly import SubproblemAssembler
 from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.endgame import SecondOrderModels
-from convexguid.scp.kkt import kkt_residuals
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, jacobian_structure
 from convexguid.scp.newton import Candidate, newton_candidate
+from convexguid.scp.optimality import certified_here, finish_optimal, kkt_met, measure_kkt
 from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
@@ -77,9 +77,6 @@ only makes the merit function noisier, while minimising the violation alone remo
 steps. A later stall raises the penalty as usual.
 """
 
-
-MAX_ESCAPES = 2
-"""Steps off a saddle (a stationary point with negative curvature) one run may take."""
 
 POLISH_ITERATIONS = 6
 """A feasible stall whose KKT residuals are above tolerance goes on this many iterations more (the end game's
@@ -215,7 +212,7 @@ class SCPAlgorithm:
         model = program_k.objective(result.x) + self.cost @ state.x if result.usable else float("nan")
         return result, model
 
-    def _record(self, state: IterationState, step: float, ratio: float, accepted: bool,
+    def record(self, state: IterationState, step: float, ratio: float, accepted: bool,
                 result: BackendResult) -> None:
         record = IterationRecord(state.iteration, state.objective, max_violation(state.ev), step, state.radius, ratio,
                                  accepted, result.status, result.iterations, time.perf_counter() - state.started)
@@ -240,7 +237,7 @@ class SCPAlgorithm:
             # retry a smaller, better-conditioned subproblem.
             state.failures += 1
             state.radius = self.trust_region.after_failure(state.radius)
-            self._record(state, 0.0, float("nan"), False, result)
+            self.record(state, 0.0, float("nan"), False, result)
             if not self.retry.retry(state.failures):
                 state.finish("solver_error", f"backend {self.solver_label} returned {result.status} "
                                              f"{state.failures} times in a row")
@@ -250,7 +247,7 @@ class SCPAlgorithm:
         newton = None
         if result.z is not None:
             state.multipliers = self.assembler.multipliers(result.z)
-            if self._certified_here(state, result, state.merit - model):
+            if certified_here(self, state, result, state.merit - model):
                 return self._check_limit(state)
             t = time.perf_counter()
             newton = newton_candidate(self, state)
@@ -285,11 +282,11 @@ class SCPAlgorithm:
             state.x, state.merit = x_new, merit_new
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
             state.objective = self._objective(state.ev, state.x)
-            self._measure_kkt(state)
+            measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, ratio, step)
-        self._record(state, step, ratio, accepted, result)
-        if accepted and self._kkt_met(state):
-            self._optimal(state, "KKT conditions met")
+        self.record(state, step, ratio, accepted, result)
+        if accepted and kkt_met(self, state):
+            finish_optimal(self, state, "KKT conditions met")
             return self._check_limit(state)
         if self._small(state, step, predicted):
             self._stalled(state)
@@ -328,6 +325,13 @@ class SCPAlgorithm:
         raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
         return x_new, ev_new, raw_new
 
+    def move_to(self, state: IterationState, x: np.ndarray, penalty: float) -> None:
+        """Make ``x`` the iterate: its evaluation with Jacobians, objective and merit (with weight ``penalty``)."""
+        state.x, state.penalty = x, penalty
+        state.raw, state.ev = self._evaluate(state, x, jacobians=True)
+        state.objective = self._objective(state.ev, x)
+        state.merit = self._merit(state.ev, x, penalty)
+
     merit = _merit
     ratio = staticmethod(_ratio)
     violation = staticmethod(max_violation)
@@ -338,98 +342,16 @@ class SCPAlgorithm:
             # a whole step the model predicted well frees Newton's radius; a cut one doubles it (Alg. 4.1 of
             # Nocedal & Wright): freed at once, the next full step overshoots where the model no longer holds
             state.newton_radius = np.inf if newton.whole else 2.0 * state.newton_radius
-        state.x, state.merit, state.penalty = newton.x, newton.merit, newton.penalty
-        state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
-        state.objective = self._objective(state.ev, state.x)
+        self.move_to(state, newton.x, newton.penalty)
         state.multipliers = newton.model.working.multipliers(newton.newton.multipliers, state.multipliers)
-        self._measure_kkt(state)
+        measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
-        self._record(state, newton.step, newton.ratio, True, replace(result, status="newton"))
-        if self._kkt_met(state):
-            self._optimal(state, "KKT conditions met")
+        self.record(state, newton.step, newton.ratio, True, replace(result, status="newton"))
+        if kkt_met(self, state):
+            finish_optimal(self, state, "KKT conditions met")
         elif newton.whole and self._small(state, newton.step, newton.predicted):
             # only a whole Newton step that is small says the iterates stopped (a cut one may just be short)
             self._stalled(state)
-
-    # --- optimality ---------------------------------------------------------------------------
-    def _certified_here(self, state: IterationState, result: BackendResult, predicted: float) -> bool:
-        """Whether the subproblem just solved at the iterate proves it a KKT point (then the run ends there).
-
-        The subproblem's multipliers satisfy its own optimality conditions at its step :math:`d`; for the
-        nonlinear program at the iterate they leave a stationarity residual of the order of the model's curvature
-        times :math:`d` (and the trust region's multipliers, when it binds). They certify the iterate when they
-        meet the KKT tolerance and the decrease the subproblem still ``predicted`` is within the same tolerance
-        of the objective: the largest stationarity residual alone is a per-variable figure, and over hundreds of
-        variables a step it allows may still gain more than that (measured on the CW docking example: residuals
-        within 1e-6 at a fuel 1.5e-6 above the optimum the next step reached). Without this certificate, the last
-        step of a converged run, a few 1e-7 long, is judged by a ratio of two round-off-sized decreases and may
-        be refused, collapsing the trust region one measurement short of the KKT tolerance (measured: the
-        multi-cone minimum-time and minimum-energy files, stationarity 1.3e-6 and 2.3e-6 against 1e-6).
-        """
-        self._measure_kkt(state)
-        if not self._kkt_met(state) or predicted > self.settings.kkt_tolerance * state.kkt.objective_unit:
-            return False
-        self._record(state, 0.0, float("nan"), False, replace(result, status="kkt"))
-        self._optimal(state, "KKT conditions met")
-        return True
-
-    def _measure_kkt(self, state: IterationState) -> None:
-        """KKT residuals at the iterate with the last subproblem's multipliers (none yet: left unmeasured)."""
-        if state.multipliers is None or self.phase1:
-            return
-        state.kkt = kkt_residuals(state.x, state.raw, state.multipliers, weights=self.weights, cost=self.cost,
-                                  linear=self.program.linear_constraints(), outputs=self.outputs, scale=self.scale,
-                                  objective=state.objective, objective_at_start=self.objective_at_start,
-                                  feasibility=max_violation(state.ev))
-
-    def _kkt_met(self, state: IterationState) -> bool:
-        s = self.settings
-        return (not self.phase1 and state.kkt is not None
-                and state.kkt.met(s.kkt_tolerance, s.feasibility_tolerance))
-
-    def _optimal(self, state: IterationState, why: str) -> None:
-        """A KKT point: converged, unless the reduced Hessian has negative curvature (then step off the saddle).
-
-        Negative curvature counts when a step of the initial trust radius along it would gain more than the KKT
-        tolerance of the objective, :math:`\\tfrac12 |\\lambda_{min}| \\Delta_0^2 > \\epsilon\\, |f|`: a nearly
-        inactive concave constraint with a multiplier of round-off size (the powered descent's throttle floor,
-        eigenvalue -1.1e-8) is no saddle worth leaving, and stepping off it only moved the plan.
-        """
-        if self.second_order is not None and not self.phase1 and state.escapes < MAX_ESCAPES \
-                and state.multipliers is not None:
-            working = self.second_order.working_set(state.x, state.raw, state.multipliers,
-                                                    self.settings.feasibility_tolerance, state.penalty)
-            model = self.second_order.at(state.x, state.raw, state.multipliers, working)
-            newton = model.newton()
-            gain = 0.5 * max(-newton.smallest_eigenvalue, 0.0) * self.trust_region.initial**2
-            unit = state.kkt.objective_unit if state.kkt is not None else max(abs(state.objective), 1e-12)
-            if newton.step is None and gain > self.settings.kkt_tolerance * unit:
-                self._escape(state, newton.negative_direction, newton.smallest_eigenvalue)
-                return
-        state.finish("converged", "; ".join([why, *state.escape_log]))
-
-    def _escape(self, state: IterationState, direction: np.ndarray, curvature: float) -> None:
-        """Step off a saddle along its direction of negative curvature (scaled ``direction``) and go on.
-
-        The step is the initial trust radius (halved while the merit function does not drop, three times
-        at most); whatever it finds, the run goes on from there with the initial radius.
-        """
-        state.escapes += 1
-        radius = self.trust_region.initial
-        for _ in range(4):
-            x_try = state.x + radius * direction * self.scale
-            _, ev_try = self._evaluate(state, x_try, jacobians=False)
-            if self._merit(ev_try, x_try, state.penalty) < state.merit:
-                break
-            radius *= 0.5
-        state.x = x_try
-        state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
-        state.objective = self._objective(state.ev, state.x)
-        state.merit = self._merit(state.ev, state.x, state.penalty)
-        state.radius = self.trust_region.initial
-        state.kkt = None
-        state.escape_log.append(f"stepped off a saddle (reduced-Hessian eigenvalue {curvature:.3g}) "
-                                f"at iteration {state.iteration}")
 
     def _stalled(self, state: IterationState) -> None:
         """The iterates stopped moving: converged if feasible and a KKT point, else raise the penalty or certify.
@@ -443,8 +365,8 @@ class SCPAlgorithm:
             why = ("trust region collapsed: no decrease found near a feasible point"
                    if self.trust_region.collapsed(state.radius) else "step and predicted decrease below tolerance")
             if state.kkt is None:
-                self._measure_kkt(state)
-            if state.kkt is not None and not self._kkt_met(state):
+                measure_kkt(self, state)
+            if state.kkt is not None and not kkt_met(self, state):
                 if (self.second_order is not None and state.polish < POLISH_ITERATIONS
                         and not self.trust_region.collapsed(state.radius)):
                     state.polish += 1  # a small first-order step is not yet proof of optimality: go on
@@ -453,7 +375,7 @@ class SCPAlgorithm:
                                            f"{s.kkt_tolerance:g} (stationarity {state.kkt.relative_stationarity:.2g}, "
                                            f"complementarity {state.kkt.relative_complementarity:.2g} relative)")
                 return
-            self._optimal(state, why)
+            finish_optimal(self, state, why)
             return
         if self.phase1:
             state.finish("infeasible", "the elastic phase-1 problem stalls with the constraints still violated: "
