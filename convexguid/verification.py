@@ -91,7 +91,7 @@ def propagate_attitude(inertia: np.ndarray, torque: Callable[[float], np.ndarray
     piece's dense output; the track's torque is ``torque.sample(t_grid)`` when the torque has it.
     """
     t_grid = np.asarray(t_grid, dtype=float)
-    edges = _piece_edges(getattr(torque, "breakpoints", ()), t_grid[0], t_grid[-1])
+    edges = piece_edges(getattr(torque, "breakpoints", ()), t_grid[0], t_grid[-1])
     y = np.concatenate([q0, omega0]).astype(float)
     states = np.empty((t_grid.size, y.size))
     first = 0
@@ -124,7 +124,7 @@ MIN_PIECE = 1e-9
 """Breakpoints closer than this fraction of the span to the ends or to one another are merged."""
 
 
-def _piece_edges(breakpoints, t0: float, tf: float) -> np.ndarray:
+def piece_edges(breakpoints, t0: float, tf: float) -> np.ndarray:
     """``t0``, the breakpoints inside ``(t0, tf)`` (at least :data:`MIN_PIECE` of the span apart), ``tf``."""
     gap = MIN_PIECE * (tf - t0)
     edges = [t0]

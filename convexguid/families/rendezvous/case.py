@@ -33,7 +33,7 @@ from convexguid.errors import SolverError
 from convexguid.families.rendezvous.figures import ArcsPlanFigures, LcvxPlanFigures
 from convexguid.scp.engine import IterationRecord
 from convexguid.solution import Trajectory
-from convexguid.verification import ConstraintCheck, Verification
+from convexguid.verification import MIN_PIECE, ConstraintCheck, Verification, piece_edges
 
 
 @dataclass(frozen=True)
@@ -162,13 +162,17 @@ def propagate_thrust(case: Rendezvous, plan: ThrustPlan, grid_points: int, rtol:
 
     Every thrust segment and every coast between them is integrated separately, so the
     integrator never steps across a discontinuity of :math:`u`. The dense grid is the
-    union of ``grid_points`` equally spaced times and the segment ends.
+    union of ``grid_points`` equally spaced times and the segment ends, times closer than
+    :data:`~convexguid.verification.MIN_PIECE` of the horizon taken as one (a segment end that meets a
+    grid time, or the next segment's start, to round-off: otherwise the grid's size, which the report
+    prints, would hang on whether two times came out bit-equal).
     """
     A, B = case.matrices()
-    cuts = np.unique(np.concatenate([[case.t0, case.tf], [s.start for s in plan.segments],
-                                     [s.end for s in plan.segments]]))
-    cuts = cuts[(cuts >= case.t0) & (cuts <= case.tf)]
-    grid = np.unique(np.concatenate([np.linspace(case.t0, case.tf, grid_points), cuts]))
+    ends = [time for s in plan.segments for time in (s.start, s.end)]
+    cuts = piece_edges(ends, case.t0, case.tf)
+    uniform = np.linspace(case.t0, case.tf, grid_points)
+    near_cut = np.abs(uniform[:, None] - cuts[None, :]).min(axis=1) <= MIN_PIECE * (case.tf - case.t0)
+    grid = np.sort(np.concatenate([uniform[~near_cut], cuts]))
     states = np.empty((grid.size, case.nx))
     states[0] = case.x0
     x = case.x0.copy()
