@@ -33,6 +33,8 @@ pattern and solves in ``u`` alone, which is what makes this form fast.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -40,6 +42,16 @@ from convexguid.backends import Cones, ConicProgram
 from convexguid.scp.assembly import DualLayout, _add_jacobian, _jacobian_data, _Pattern, _values, add_softened_rows
 from convexguid.scp.lagrangian import Multipliers
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
+
+
+@dataclass(frozen=True)
+class CurvedTerms:
+    """A model Hessian in the scaled step ``u`` that replaces the condensed one, with the linear and constant terms
+    that come with it (:mod:`convexguid.scp.curved`)."""
+
+    hessian: np.ndarray
+    linear: np.ndarray
+    constant: float
 
 
 class CondensedAssembler:
@@ -91,8 +103,11 @@ class CondensedAssembler:
         self._cost_u = np.asarray(linear_cost, dtype=float) * scale
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
-              hessian_diagonal: np.ndarray | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian_diagonal`` >= 0 if curvature)."""
+              hessian_diagonal: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
+        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian_diagonal`` >= 0 if curvature).
+
+        ``curved`` replaces the model's whole Hessian in ``u`` (scaled, positive semidefinite, the Gauss-Newton part
+        included) and adds its linear and constant terms (:mod:`convexguid.scp.curved`)."""
         n, lin, scale = self.n, self.linear, self.scale
         n_o = self._M.shape[0]
         r = ev.residuals
@@ -117,11 +132,17 @@ class CondensedAssembler:
         hess = 2.0 * (J_u.T @ WJ)
         if self.curvature and hessian_diagonal is not None:
             hess[np.diag_indices(n)] += hessian_diagonal * scale**2
+        if curved is not None:
+            hess = curved.hessian
         P = sp.csc_matrix((hess[self._p_rows, self._p_cols], self._p_indices, self._p_indptr),
                           shape=(self.num_z, self.num_z))
         q = np.full(self.num_z, float(penalty))
         q[:n] = 2.0 * (WJ.T @ r) + self._cost_u
-        return ConicProgram(P, q, A, b, self.cones, constant=float(self.weights @ r**2))
+        constant = float(self.weights @ r**2)
+        if curved is not None:
+            q[:n] += curved.linear
+            constant += curved.constant
+        return ConicProgram(P, q, A, b, self.cones, constant=constant)
 
     def multipliers(self, z: np.ndarray) -> Multipliers:
         """The nonlinear program's multipliers from the subproblem's row duals (see ``DualLayout``)."""

@@ -14,9 +14,12 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import lsq_linear
 
 from convexguid.backends.base import BackendResult
 from convexguid.scp.kkt import kkt_residuals
+from convexguid.scp.lagrangian import Multipliers, WorkingSet
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import SCPAlgorithm
@@ -103,3 +106,61 @@ def escape_saddle(algo: SCPAlgorithm, state: IterationState, direction: np.ndarr
     state.kkt = None
     state.escape_log.append(f"stepped off a saddle (reduced-Hessian eigenvalue {curvature:.3g}) "
                             f"at iteration {state.iteration}")
+
+
+NEAR_ACTIVE = 1e-6
+"""An inequality this close to its bound (in its own unit) may carry a multiplier in the least-squares estimate."""
+
+
+def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Multipliers | None:
+    """The multipliers that best satisfy stationarity at the iterate: nonnegative on the inequalities within
+    :data:`NEAR_ACTIVE` of their bounds, free on the equalities, zero elsewhere (None with cones: their duals are not
+    estimated).
+
+    The KKT conditions ask that *some* multipliers exist. Where the active constraints are degenerate (a rate box
+    held over several nodes, whose rows the defects nearly imply) the multipliers are not unique, and those of the
+    last subproblem or of Newton's working set can miss by far more than the iterate does: a converged multi-cone
+    plan, its objective steady to ten digits, measured a stationarity of 2.7e-5 with them. This estimate,
+    :math:`\\min \\|S(\\nabla f + A_W^T y)\\|_2` with :math:`y \\ge 0` on the inequalities (a bounded least-squares
+    problem, SciPy's BVLS), is the best those constraints can do.
+    """
+    raw = state.raw
+    if raw.cones or raw.residual_jacobian is None and raw.residuals.size:
+        return None
+    linear, outputs = algo.program.linear_constraints(), algo.outputs
+    gap = linear.G @ state.x - linear.h if linear.G.shape[0] else np.zeros(0)
+    out = outputs.M @ raw.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
+    values = np.concatenate([b.values for b in raw.inequalities]) if raw.inequalities else np.zeros(0)
+    size = sum(b.values.size for b in raw.equalities)
+    working = WorkingSet(gap >= -NEAR_ACTIVE, out >= -NEAR_ACTIVE, values >= -NEAR_ACTIVE, np.ones(size, dtype=bool))
+    rows = working.rows(raw, linear, outputs)
+    gradient = algo.cost.astype(float)
+    if raw.residuals.size:
+        gradient = gradient + 2.0 * (raw.residual_jacobian.T @ (algo.weights * raw.residuals))
+    free = linear.A.shape[0]
+    signed = rows.shape[0] - free - int(working.equality.sum())
+    lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(rows.shape[0] - free - signed, -np.inf)])
+    if rows.shape[0] == 0:
+        return None
+    matrix = (rows @ sp.diags(algo.scale)).T.toarray()
+    fit = lsq_linear(matrix, -gradient * algo.scale, bounds=(lower, np.full(lower.size, np.inf)), method="bvls")
+    shape = Multipliers(np.zeros(size), np.zeros(values.size), np.zeros(out.size), np.zeros(free), np.zeros(gap.size))
+    return working.multipliers(fit.x, shape)
+
+
+def certified_by_least_squares(algo: SCPAlgorithm, state: IterationState, why: str) -> bool:
+    """Whether the :func:`least_squares_multipliers` make the iterate a KKT point (then the run ends there)."""
+    if algo.phase1 or state.multipliers is None:
+        return False
+    estimate = least_squares_multipliers(algo, state)
+    if estimate is None:
+        return False
+    kept = state.multipliers
+    state.multipliers = estimate
+    measure_kkt(algo, state)
+    if kkt_met(algo, state):
+        finish_optimal(algo, state, why)
+        return True
+    state.multipliers = kept
+    measure_kkt(algo, state)
+    return False
