@@ -87,9 +87,6 @@ benchmark, slew #4): 14 more iterations to the KKT tolerance, 5e-6 below where t
 
 
 
-LEAST_SQUARES_KKT = "KKT conditions met (least-squares multipliers)"
-
-
 def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
     """:math:`f(x) = \\sum_i w_i r_i^2 + c^T x`."""
     return float(weights @ ev.residuals**2 + cost @ x)
@@ -313,9 +310,9 @@ class SCPAlgorithm:
         state.radius = self.trust_region.update(state.radius, ratio, step)
         self.record(state, step, ratio, accepted, result if curved is None else replace(result, status="curved"))
         if accepted and kkt_met(self, state):
-            finish_optimal(self, state, "KKT conditions met")
+            finish_optimal(self, state)
             return self._check_limit(state)
-        if accepted and curved is not None and certified_by_least_squares(self, state, LEAST_SQUARES_KKT):
+        if accepted and curved is not None and certified_by_least_squares(self, state):
             # the curved subproblem's own multipliers carry its augmentation (:mod:`convexguid.scp.curved`)
             return self._check_limit(state)
         if self._small(state, step, predicted):
@@ -378,7 +375,7 @@ class SCPAlgorithm:
         state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
         self.record(state, newton.step, newton.ratio, True, replace(result, status="newton"))
         if kkt_met(self, state):
-            finish_optimal(self, state, "KKT conditions met")
+            finish_optimal(self, state)
         elif newton.whole and self._small(state, newton.step, newton.predicted):
             # only a whole Newton step that is small says the iterates stopped (a cut one may just be short)
             self._stalled(state)
@@ -397,7 +394,7 @@ class SCPAlgorithm:
             if state.kkt is None:
                 measure_kkt(self, state)
             if state.kkt is not None and not kkt_met(self, state):
-                if certified_by_least_squares(self, state, f"{why}; {LEAST_SQUARES_KKT}"):
+                if certified_by_least_squares(self, state):
                     return
                 if (self.second_order is not None and state.polish < POLISH_ITERATIONS
                         and not self.trust_region.collapsed(state.radius)):
@@ -407,7 +404,10 @@ class SCPAlgorithm:
                                            f"{s.kkt_tolerance:g} (stationarity {state.kkt.relative_stationarity:.2g}, "
                                            f"complementarity {state.kkt.relative_complementarity:.2g} relative)")
                 return
-            finish_optimal(self, state, why)
+            if state.kkt is None and not self.phase1:
+                state.finish("unverified", f"{why}; not proved optimal: the backend reported no multipliers")
+                return
+            finish_optimal(self, state)
             return
         if self.phase1:
             state.finish("infeasible", "the elastic phase-1 problem stalls with the constraints still violated: "

@@ -63,12 +63,16 @@ def certified_here(algo: SCPAlgorithm, state: IterationState, result: BackendRes
     if not kkt_met(algo, state) or predicted > algo.settings.kkt_tolerance * state.kkt.objective_unit:
         return False
     algo.record(state, 0.0, float("nan"), False, replace(result, status="kkt"))
-    finish_optimal(algo, state, "KKT conditions met")
+    finish_optimal(algo, state)
     return True
 
 
-def finish_optimal(algo: SCPAlgorithm, state: IterationState, why: str) -> None:
+def finish_optimal(algo: SCPAlgorithm, state: IterationState) -> None:
     """A KKT point: converged, unless the reduced Hessian has negative curvature (then step off the saddle).
+
+    The message is "KKT conditions met" whichever multipliers proved it and whatever stopped the iterates (the
+    report prints it, and the route there may differ between machines; the iteration history keeps it), followed
+    by any steps off saddles.
 
     Negative curvature counts when a step of the initial trust radius along it would gain more than the KKT
     tolerance of the objective, :math:`\\tfrac12 |\\lambda_{min}| \\Delta_0^2 > \\epsilon\\, |f|`: a nearly inactive
@@ -85,7 +89,7 @@ def finish_optimal(algo: SCPAlgorithm, state: IterationState, why: str) -> None:
         if newton.step is None and gain > algo.settings.kkt_tolerance * unit:
             escape_saddle(algo, state, newton.negative_direction, newton.smallest_eigenvalue)
             return
-    state.finish("converged", "; ".join([why, *state.escape_log]))
+    state.finish("converged", "; ".join(["KKT conditions met", *state.escape_log]))
 
 
 def escape_saddle(algo: SCPAlgorithm, state: IterationState, direction: np.ndarray, curvature: float) -> None:
@@ -148,7 +152,7 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     return working.multipliers(fit.x, shape)
 
 
-def certified_by_least_squares(algo: SCPAlgorithm, state: IterationState, why: str) -> bool:
+def certified_by_least_squares(algo: SCPAlgorithm, state: IterationState) -> bool:
     """Whether the :func:`least_squares_multipliers` make the iterate a KKT point (then the run ends there)."""
     if algo.phase1 or state.multipliers is None:
         return False
@@ -159,7 +163,7 @@ def certified_by_least_squares(algo: SCPAlgorithm, state: IterationState, why: s
     state.multipliers = estimate
     measure_kkt(algo, state)
     if kkt_met(algo, state):
-        finish_optimal(algo, state, why)
+        finish_optimal(algo, state)
         return True
     state.multipliers = kept
     measure_kkt(algo, state)
