@@ -396,9 +396,12 @@ class SCPAlgorithm:
             if state.kkt is not None and not kkt_met(self, state):
                 if certified_by_least_squares(self, state):
                     return
-                if (self.second_order is not None and state.polish < POLISH_ITERATIONS
-                        and not self.trust_region.collapsed(state.radius)):
-                    state.polish += 1  # a small first-order step is not yet proof of optimality: go on
+                if self.second_order is not None and state.polish < POLISH_ITERATIONS:
+                    # a small step is not yet proof of optimality: polish on (the curved subproblem); a trust
+                    # region that collapsed on ratios of round-off-sized decreases opens again
+                    state.polish += 1
+                    if self.trust_region.collapsed(state.radius):
+                        state.radius = self.trust_region.initial
                     return
                 state.finish("unverified", f"{why}; not proved optimal: KKT residuals above tolerance "
                                            f"{s.kkt_tolerance:g} (stationarity {state.kkt.relative_stationarity:.2g}, "
