@@ -30,9 +30,10 @@ CASES = [
     pytest.param("betts_asymmetric_slew.yaml", [], 1e-4, True, id="betts-time"),
     pytest.param("guo2011_scp_energy.yaml", ["boundary.tf_from=null", "boundary.tf_s=196.8"], 1e-6, True,
                  id="guo2011-energy"),
-    # the exactly symmetric slew reaches its saddle and steps off it along the negative curvature; a perturbed
-    # one drifts off it on its own, somewhere else: the same answer by another path (measured 23 vs 39 iterations)
-    pytest.param("wang_multicone_time.yaml", BILIMORIA_WIE, 1e-4, False, id="bilimoria-wie-time"),
+    # the exactly symmetric slew: the family's start is moved off the symmetry by a fixed offset (off_symmetry in
+    # families/quaternion_attitude/program.py), so it and its perturbations take one path (measured: 10 iterations
+    # each, 3.2446028 s, at inertia changes of 0 and 1e-13 ... 1e-8)
+    pytest.param("wang_multicone_time.yaml", BILIMORIA_WIE, 1e-4, True, id="bilimoria-wie-time"),
 ]
 
 
