@@ -31,7 +31,9 @@ iterate (:mod:`convexguid.scp.kkt`, stationarity and complementarity relative to
 ``kkt_tolerance``), with the multipliers of the subproblem that led to it or of the one solved there, and the
 reduced Hessian shows no direction of negative curvature (a stationary point with one is a saddle: the engine
 steps off it along that direction and goes on, twice at most); ``unverified`` when the steps become small at a
-feasible point whose KKT residuals stay above tolerance (the message names them);
+feasible point whose KKT residuals stay above tolerance even after polishing (the SQP subproblem of
+:mod:`convexguid.scp.curved` and least-squares multipliers, :data:`POLISH_ITERATIONS` stalls more; the message
+names the residuals);
 ``infeasible`` only with a certificate: the hard linear constraints admit no point (an
 elastic LP, :func:`~convexguid.scp.restoration.restore_start`), or the elastic phase-1 problem
 (:class:`~convexguid.scp.restoration.ElasticPhase1`), run when the iterates stall infeasible at
@@ -84,7 +86,6 @@ POLISH_ITERATIONS = 20
 :mod:`convexguid.scp.curved`, Newton's steps) until it has stalled this many times more; then it is reported
 ``unverified`` with the residuals named. Measured on the random minimum-time slew that needed it most (robustness
 benchmark, slew #4): 14 more iterations to the KKT tolerance, 5e-6 below where the linear model had stopped."""
-
 
 
 def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
@@ -229,7 +230,7 @@ class SCPAlgorithm:
         return backend, result, model
 
     def record(self, state: IterationState, step: float, ratio: float, accepted: bool,
-                result: BackendResult) -> None:
+               result: BackendResult) -> None:
         record = IterationRecord(state.iteration, state.objective, max_violation(state.ev), step, state.radius, ratio,
                                  accepted, result.status, result.iterations, time.perf_counter() - state.started)
         state.history.append(record)
