@@ -47,6 +47,14 @@ def test_path_transfer_row_once(rows):
     assert row.tf_s > 0 and row.wall_s > 0
 
 
+def test_path_transfer_is_skipped_without_a_rate_bound():
+    """The planner's time law needs a rate bound; a file without one (Betts' slew) gets a row saying so, not a
+    failure."""
+    spec = load_problem(MULTICONE.parent / "betts_asymmetric_slew.yaml")
+    row = attitude_bench._path_transfer_row(attitude_bench.build_case(spec), 1)
+    assert row.status == "skipped" and "rate bound" in row.message
+
+
 @pytest.mark.parametrize("objective", ["time", "energy"])
 def test_scp_rows_have_positive_times(rows, objective):
     row = _row(rows, f"scp {objective}")

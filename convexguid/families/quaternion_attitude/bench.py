@@ -148,7 +148,10 @@ def _solution_nodes(sol: Solution) -> np.ndarray:
 
 
 def _path_transfer_row(case: AttitudeCase, repeat: int) -> AttitudeBenchRow:
-    """The path-transfer planner's maneuver time; ``wall s`` is its planning time."""
+    """The path-transfer planner's maneuver time; ``wall s`` is its planning time (skipped without a rate bound: the
+    planner's time law is built on it)."""
+    if case.rate_max is None:
+        return AttitudeBenchRow(None, _PATH, "time", "skipped", message="no rate bound (the planner needs one)")
     def row(plan, _) -> AttitudeBenchRow:
         return AttitudeBenchRow(None, _PATH, "time", "converged", tf_s=plan.maneuver_time_s,
                                 iterations=len(plan.waypoints), wall_s=plan.planning_time_s, ok=True)
