@@ -81,9 +81,7 @@ def strongly_active(working: WorkingSet, multipliers: Multipliers) -> WorkingSet
     the multipliers bend around a constraint that does not bind (measured on the flat slew with the sun cone active:
     stationarity 0.54 with it in).
     """
-    everything = np.concatenate([multipliers.linear_inequality, multipliers.output, multipliers.inequality,
-                                 multipliers.equality, [0.0]])
-    significant = 1e-6 * max(float(np.max(np.abs(everything))), 1e-300)
+    significant = multipliers.significant()
     return replace(working, linear_inequality=working.linear_inequality & (multipliers.linear_inequality > significant),
                    output=working.output & (multipliers.output > significant),
                    inequality=working.inequality & (multipliers.inequality > significant))
@@ -117,11 +115,11 @@ class CurvedSubproblem:
         """The backend's answer and the model's merit after its step (as the engine's own subproblem gives them);
         ``ev`` the evaluation the constraints are linearized from (shifted, for a second-order correction)."""
         algo = self.algo
+        linear = algo.second_order.linear
         if self.assembler is None:
-            program = algo.program
-            self.assembler = CondensedAssembler(program.num_variables, state.raw, program.linear_constraints(),
-                                                algo.outputs, algo.scale, algo.cost, algo.weights)
-        values = model.working.values(ev, algo.program.linear_constraints(), algo.outputs, state.x)
+            self.assembler = CondensedAssembler(algo.program.num_variables, state.raw, linear, algo.outputs,
+                                                algo.scale, algo.cost, algo.weights)
+        values = model.working.values(ev, linear, algo.outputs, state.x)
         program_k = self.assembler.build(state.x, ev, state.radius, state.penalty, curved=model.terms(values))
         self.backend, result, value = algo.solved(state, program_k, self.backend, "clarabel")
         return result, value

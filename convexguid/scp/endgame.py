@@ -31,7 +31,7 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 
-from convexguid.scp.lagrangian import CurvatureWeights, LagrangianHessian, Multipliers, WorkingSet
+from convexguid.scp.lagrangian import CurvatureWeights, LagrangianHessian, Multipliers, WorkingSet, objective_gradient
 from convexguid.scp.problem import Evaluation, NonconvexProgram, OutputConstraints
 
 RANK_TOLERANCE = 1e-6
@@ -160,9 +160,7 @@ class SecondOrderModels:
         omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs.M)
         curvature = self.hessians.curvature(x, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
         hessian = self.gauss_newton(raw) + curvature.multiply(np.outer(self.scale, self.scale)).toarray()
-        gradient = self.cost.astype(float)
-        if raw.residuals.size:
-            gradient = gradient + 2.0 * (raw.residual_jacobian.T @ (self.weights * raw.residuals))
+        gradient = objective_gradient(raw, self.weights, self.cost)
         rows = (working.rows(raw, self.linear, self.outputs) @ sp.diags(self.scale)).toarray()
         return LocalModel(hessian, gradient * self.scale, working, rows,
                           working.values(raw, self.linear, self.outputs, x))

@@ -78,6 +78,12 @@ class Multipliers:
         return max(float(np.max(np.abs(np.concatenate([self.equality, self.inequality, self.output, self.cone])),
                                 initial=0.0)), 1e-12)
 
+    def significant(self) -> float:
+        """The size from which a multiplier counts (1e-6 of the largest of any constraint): an interior-point solver
+        leaves tiny positive duals on inactive rows."""
+        everything = np.concatenate([self.linear_inequality, self.output, self.inequality, self.equality, [0.0]])
+        return 1e-6 * max(float(np.max(np.abs(everything))), 1e-300)
+
     def residual_weights(self, residuals: np.ndarray, weights: np.ndarray, outputs_M: sp.spmatrix) -> np.ndarray:
         """:math:`\\omega = 2 W r + M^T \\nu`: the weight of each residual's curvature in the Lagrangian."""
         return 2.0 * weights * residuals + (outputs_M.T @ self.output if self.output.size else 0.0)
@@ -100,6 +106,14 @@ class CurvatureWeights:
     residual: np.ndarray
     inequality: np.ndarray
     equality: np.ndarray
+
+
+def objective_gradient(ev: Evaluation, weights: np.ndarray, cost: np.ndarray) -> np.ndarray:
+    """:math:`\\nabla f = c + 2 J_r^T W r` from an evaluation with Jacobians."""
+    gradient = np.asarray(cost, dtype=float)
+    if ev.residuals.size:
+        gradient = gradient + 2.0 * (ev.residual_jacobian.T @ (weights * ev.residuals))
+    return gradient
 
 
 def lagrangian_gradient(ev: Evaluation, weights: CurvatureWeights) -> np.ndarray:
@@ -261,10 +275,7 @@ class WorkingSet:
     @classmethod
     def at(cls, ev: Evaluation, multipliers: Multipliers, linear: LinearConstraints, outputs: OutputConstraints,
            x: np.ndarray, tolerance: float, penalty: float) -> WorkingSet:
-        # an interior-point solver leaves tiny positive duals on inactive rows: a multiplier counts from this size
-        everything = np.concatenate([multipliers.linear_inequality, multipliers.output, multipliers.inequality,
-                                     multipliers.equality, [0.0]])
-        significant = 1e-6 * max(float(np.max(np.abs(everything))), 1e-300)
+        significant = multipliers.significant()
         gap = linear.G @ x - linear.h if linear.G.shape[0] else np.zeros(0)
         out = outputs.M @ ev.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
         values = _values_of(ev.inequalities)

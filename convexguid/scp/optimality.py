@@ -19,7 +19,7 @@ from scipy.optimize import lsq_linear
 
 from convexguid.backends.base import BackendResult
 from convexguid.scp.kkt import kkt_residuals
-from convexguid.scp.lagrangian import Multipliers, WorkingSet
+from convexguid.scp.lagrangian import Multipliers, WorkingSet, objective_gradient
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import SCPAlgorithm
@@ -129,25 +129,24 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     problem, SciPy's BVLS), is the best those constraints can do.
     """
     raw = state.raw
-    if raw.cones or raw.residual_jacobian is None and raw.residuals.size:
+    if raw.cones:
         return None
-    linear, outputs = algo.program.linear_constraints(), algo.outputs
+    linear = algo.program.linear_constraints() if algo.second_order is None else algo.second_order.linear
+    outputs = algo.outputs
     gap = linear.G @ state.x - linear.h if linear.G.shape[0] else np.zeros(0)
     out = outputs.M @ raw.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
     values = np.concatenate([b.values for b in raw.inequalities]) if raw.inequalities else np.zeros(0)
     size = sum(b.values.size for b in raw.equalities)
     working = WorkingSet(gap >= -NEAR_ACTIVE, out >= -NEAR_ACTIVE, values >= -NEAR_ACTIVE, np.ones(size, dtype=bool))
     rows = working.rows(raw, linear, outputs)
-    gradient = algo.cost.astype(float)
-    if raw.residuals.size:
-        gradient = gradient + 2.0 * (raw.residual_jacobian.T @ (algo.weights * raw.residuals))
-    free = linear.A.shape[0]
-    signed = rows.shape[0] - free - int(working.equality.sum())
-    lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(rows.shape[0] - free - signed, -np.inf)])
     if rows.shape[0] == 0:
         return None
+    free = linear.A.shape[0]
+    signed = rows.shape[0] - free - size
+    lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(size, -np.inf)])
     matrix = (rows @ sp.diags(algo.scale)).T.toarray()
-    fit = lsq_linear(matrix, -gradient * algo.scale, bounds=(lower, np.full(lower.size, np.inf)), method="bvls")
+    target = -objective_gradient(raw, algo.weights, algo.cost) * algo.scale
+    fit = lsq_linear(matrix, target, bounds=(lower, np.full(lower.size, np.inf)), method="bvls")
     shape = Multipliers(np.zeros(size), np.zeros(values.size), np.zeros(out.size), np.zeros(free), np.zeros(gap.size))
     return working.multipliers(fit.x, shape)
 
@@ -159,12 +158,11 @@ def certified_by_least_squares(algo: SCPAlgorithm, state: IterationState) -> boo
     estimate = least_squares_multipliers(algo, state)
     if estimate is None:
         return False
-    kept = state.multipliers
+    kept = state.multipliers, state.kkt
     state.multipliers = estimate
     measure_kkt(algo, state)
     if kkt_met(algo, state):
         finish_optimal(algo, state)
         return True
-    state.multipliers = kept
-    measure_kkt(algo, state)
+    state.multipliers, state.kkt = kept
     return False
