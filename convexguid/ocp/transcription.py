@@ -32,8 +32,10 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from convexguid.ocp.curvature import ElementCurvature
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
-from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import (ConeBlock, ConstraintBlock, CurvatureModel, Evaluation, LinearConstraints,
+                                    OutputConstraints)
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
@@ -94,6 +96,7 @@ class Transcription:
 
     def __init__(self, problem: Problem, margins: Margins | None = None, intervals: int | None = None) -> None:
         problem.check()
+        problem.estimate_scales()
         self.problem = problem
         self.N = intervals if intervals is not None else problem.intervals
         self.nx, self.nu = len(problem.states), len(problem.controls)
@@ -295,6 +298,18 @@ class Transcription:
             lagrangian = lagrangian + ca.dot(nu, epigraph)
         hessian = ca.hessian(lagrangian, z)[0]
         return ca.Function("hessian", [z, lam, mu, nu], [hessian]), _Pattern(hessian.sparsity())
+
+    @cached_property
+    def _element_curvature(self) -> ElementCurvature:
+        z, equalities, path, epigraph = self._symbols
+        return ElementCurvature(z, ca.vertcat(equalities, path, epigraph))
+
+    def curvature_model(self) -> CurvatureModel:
+        """The Lagrangian's curvature made convex row by row (:mod:`convexguid.ocp.curvature`): the multipliers of
+        the equalities (defects, path equalities), then of the inequalities (path constraints, epigraph)."""
+        elements = self._element_curvature
+        return CurvatureModel(elements.rows_upper, elements.cols_upper,
+                              lambda z, w: elements.values(z, np.concatenate([w.equality, w.inequality])))
 
     @cached_property
     def _weights_per_step(self) -> np.ndarray:

@@ -83,12 +83,13 @@ class SubproblemAssembler:
     first :class:`Evaluation`: a block whose Jacobian is a dense array gets a dense
     pattern; one given as ``scipy.sparse.coo_matrix`` keeps its pattern, and every later
     evaluation must list the same ``(row, col)`` entries in the same order. With
-    ``curvature`` the Hessian gets a diagonal block on ``d`` (the Lagrangian curvature the
-    program supplies, see :class:`~convexguid.scp.problem.NonconvexProgram`).
+    ``curvature`` (the upper triangle ``(rows, cols)`` of a pattern) the Hessian gets that block on ``d``: the
+    convex model of the Lagrangian's curvature (:class:`~convexguid.scp.problem.CurvatureModel`).
     """
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
-                 scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray, curvature: bool = False) -> None:
+                 scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
+                 curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         self.n, self.m = n, first.residuals.size
         linear = linear.sparse()
         self.linear, self.outputs, self.scale = linear, outputs, scale
@@ -127,11 +128,14 @@ class SubproblemAssembler:
         pat.finish()
         self._a_pattern = pat
         self._m_data = sp.coo_matrix(outputs.M).data
+        # P: the curvature model's upper triangle on d (if any), then the residuals' diagonal 2W on y
         self.curvature = curvature
-        diag = np.arange(n, n + self.m)
-        if curvature:
-            diag = np.concatenate([np.arange(n), diag])
-        self._p_rows = diag
+        rows, cols = curvature if curvature is not None else (np.zeros(0, int), np.zeros(0, int))
+        rows, cols = np.concatenate([rows, np.arange(n, n + self.m)]), np.concatenate([cols, np.arange(n, n + self.m)])
+        self._p_order = np.lexsort((rows, cols))
+        self._p_rows, self._p_cols = rows, cols
+        self._p_indices = rows[self._p_order].astype(np.int64)
+        self._p_indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.num_z))]).astype(np.int64)
         self._p_residual = 2.0 * weights
         self.q = np.concatenate([linear_cost, np.zeros(self.m), np.zeros(self.n_slack)])
         # the subproblem is solved for the scaled step d / scale, which keeps it well conditioned
@@ -139,8 +143,9 @@ class SubproblemAssembler:
         self._a_data_scale = self._column_scale[np.repeat(np.arange(self.num_z), np.diff(pat.indptr))]
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
-              hessian_diagonal: np.ndarray | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian_diagonal`` >= 0 if curvature)."""
+              hessian: np.ndarray | None = None) -> ConicProgram:
+        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on its
+        pattern, positive semidefinite)."""
         n, lin = self.n, self.linear
         g = _values(ev.inequalities)
         e = _values(ev.equalities)
@@ -162,11 +167,11 @@ class SubproblemAssembler:
         b = np.concatenate([lin.b - lin.A @ x, -ev.residuals, room, self.outputs.m,
                             -g, -e, e, np.zeros(self.n_slack), np.full(2 * n, radius), _values(ev.cones)])
         p_data = self._p_residual
-        if self.curvature:
-            h = np.zeros(n) if hessian_diagonal is None else hessian_diagonal
+        if self.curvature is not None:
+            h = np.zeros(self.curvature[0].size) if hessian is None else hessian
             p_data = np.concatenate([h, p_data])
-        p_data = p_data * self._column_scale[self._p_rows] ** 2
-        P = sp.csc_matrix((p_data, (self._p_rows, self._p_rows)), shape=(self.num_z, self.num_z))
+        p_data = p_data * self._column_scale[self._p_rows] * self._column_scale[self._p_cols]
+        P = sp.csc_matrix((p_data[self._p_order], self._p_indices, self._p_indptr), shape=(self.num_z, self.num_z))
         q = self.q.copy()
         q[n + self.m:] = penalty
         q *= self._column_scale

@@ -64,7 +64,8 @@ class CondensedAssembler:
     """
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
-                 scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray, curvature: bool = False) -> None:
+                 scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
+                 curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         if first.cones:
             raise ValueError("the condensed subproblem has no second-order cones; use the lifted one")
         self.n, self.m = n, first.residuals.size
@@ -103,8 +104,9 @@ class CondensedAssembler:
         self._cost_u = np.asarray(linear_cost, dtype=float) * scale
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
-              hessian_diagonal: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian_diagonal`` >= 0 if curvature).
+              hessian: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
+        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on the
+        pattern ``curvature``, positive semidefinite).
 
         ``curved`` replaces the model's whole Hessian in ``u`` (scaled, positive semidefinite, the Gauss-Newton part
         included) and adds its linear and constant terms (:mod:`convexguid.scp.curved`)."""
@@ -130,8 +132,12 @@ class CondensedAssembler:
         J_u = J * scale
         WJ = self.weights[:, None] * J_u
         hess = 2.0 * (J_u.T @ WJ)
-        if self.curvature and hessian_diagonal is not None:
-            hess[np.diag_indices(n)] += hessian_diagonal * scale**2
+        if self.curvature is not None and hessian is not None:
+            rows, cols = self.curvature
+            entries = hessian * scale[rows] * scale[cols]
+            np.add.at(hess, (rows, cols), entries)
+            off = rows != cols
+            np.add.at(hess, (cols[off], rows[off]), entries[off])
         if curved is not None:
             hess = curved.hessian
         P = sp.csc_matrix((hess[self._p_rows, self._p_cols], self._p_indices, self._p_indptr),

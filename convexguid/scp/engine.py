@@ -57,11 +57,11 @@ from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
 from convexguid.scp.endgame import SecondOrderModels
-from convexguid.scp.lagrangian import MAX_DENSE_SIZE, jacobian_structure
+from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, jacobian_structure
 from convexguid.scp.newton import Candidate, newton_candidate
 from convexguid.scp.optimality import certified_by_least_squares, certified_here, finish_optimal, kkt_met, measure_kkt
 from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
-from convexguid.scp.problem import Evaluation, NonconvexProgram, SCPSettings
+from convexguid.scp.problem import CurvatureModel, Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
 from convexguid.scp.state import IterationRecord, IterationState, SCPResult, merge_results
 
@@ -138,7 +138,8 @@ class SCPAlgorithm:
         self.weights, self.cost = program.residual_weights(), program.linear_cost()
         self.outputs = program.output_constraints()
         self.scale = program.variable_scale()
-        self.curvature = getattr(program, "lagrangian_curvature", None)
+        model = getattr(program, "curvature_model", None)
+        self.curvature: CurvatureModel | None = model() if model is not None else None
         self.second_order: SecondOrderModels | None = None
         self.curved: CurvedSubproblem | None = None
         self.assembler: SubproblemAssembler | CondensedAssembler | None = None
@@ -190,7 +191,8 @@ class SCPAlgorithm:
             assembler = CondensedAssembler if self.choice.condensed else SubproblemAssembler
             self.assembler = assembler(self.program.num_variables, raw, self.program.linear_constraints(),
                                        self.outputs, self.scale, self.cost, self.weights,
-                                       curvature=self.curvature is not None)
+                                       curvature=None if self.curvature is None
+                                       else (self.curvature.rows, self.curvature.cols))
             n = self.program.num_variables
             if self.settings.second_order and jacobian_structure(raw, n).nnz and n <= MAX_DENSE_SIZE:
                 self.second_order = SecondOrderModels(self.program, raw, self.scale, self.weights, self.cost,
@@ -249,8 +251,13 @@ class SCPAlgorithm:
         if state.polish and self.curved is not None:
             # stalled short of the KKT tolerance: the SQP step with the convexified Lagrangian Hessian
             curved = self.curved.hessian(state)
+        if self.curvature is not None and state.multipliers is None and not self.phase1:
+            # the first iteration: one linear subproblem for the multipliers the curvature is weighted by
+            first, _ = self._solve_subproblem(state, state.raw, None)
+            if first.z is not None:
+                state.multipliers = self.assembler.multipliers(first.z)
         if self.curvature is not None and state.multipliers is not None:
-            hessian = np.maximum(self.curvature(state.x, state.multipliers.by_block(state.raw)), 0.0)
+            hessian = self._curvature_values(state)
         result, model = self._solve_subproblem(state, state.raw, hessian, curved)
         if curved is not None and (result.status != "optimal" or not state.merit - model > 0):
             # the dense curved QP was solved inaccurately, or it sees no decrease: the linear subproblem instead
@@ -319,6 +326,15 @@ class SCPAlgorithm:
         if self._small(state, step, predicted):
             self._stalled(state)
         return self._check_limit(state)
+
+    def _curvature_values(self, state: IterationState) -> np.ndarray:
+        """The program's convex curvature model at the iterate, weighted by the state's multipliers."""
+        m = state.multipliers
+        t = time.perf_counter()
+        omega = m.residual_weights(state.raw.residuals, self.weights, self.outputs.M)
+        values = self.curvature.values(state.x, CurvatureWeights(omega, m.inequality, m.equality))
+        state.convexify_time_s += time.perf_counter() - t
+        return values
 
     def _relax_penalty(self, state: IterationState) -> None:
         """Near a feasible point, let the penalty weight follow the multipliers

@@ -21,6 +21,7 @@ A formulation implements :class:`NonconvexProgram`.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
@@ -138,6 +139,21 @@ class OutputConstraints:
 
 
 @dataclass(frozen=True)
+class CurvatureModel:
+    """A positive semidefinite model :math:`\\bar H \\succeq 0` of the Lagrangian's curvature that every subproblem
+    carries (the Gauss-Newton part of the residuals excluded: the subproblem has it already).
+
+    ``rows`` and ``cols`` list the upper triangle of its pattern (``rows <= cols``), fixed for the run;
+    ``values(x, weights)`` gives its entries there at ``x`` for
+    :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights`` (the last subproblem's multipliers).
+    """
+
+    rows: np.ndarray
+    cols: np.ndarray
+    values: Callable[[np.ndarray, object], np.ndarray]
+
+
+@dataclass(frozen=True)
 class ProgramSize:
     """Dimensions of the nonlinear program (what a paper's table counts)."""
 
@@ -149,7 +165,9 @@ class ProgramSize:
 class NonconvexProgram(Protocol):
     """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`.
 
-    Optional: ``lagrangian_hessian(x, weights) -> matrix``, the exact
+    Optional: ``curvature_model() -> CurvatureModel``, a convex model of the Lagrangian's curvature that every
+    subproblem then carries from the first iteration (:mod:`convexguid.ocp.curvature` builds it for every
+    ``convexguid.ocp`` transcription). ``lagrangian_hessian(x, weights) -> matrix``, the exact
     :math:`\\sum \\omega_i \\nabla^2 r_i + \\sum \\mu_j \\nabla^2 g_j + \\sum \\lambda_k \\nabla^2 e_k` for
     :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``; without it the engine differences the
     program's Jacobians (:class:`~convexguid.scp.lagrangian.LagrangianHessian`).

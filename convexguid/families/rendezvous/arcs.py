@@ -41,6 +41,7 @@ from convexguid.dynamics.clohessy_wiltshire import cw_stm, cw_stm_derivative
 from convexguid.families.rendezvous.case import BurnArc, Rendezvous, ThrustPlan
 from convexguid.scp.problem import (
     ConstraintBlock,
+    CurvatureModel,
     Evaluation,
     LinearConstraints,
     OutputConstraints,
@@ -310,18 +311,22 @@ class ArcsProgram:
         """Position and velocity scales of :meth:`variable_scale`, one per state component."""
         return self.variable_scale()[: self.layout.nx]
 
-    def lagrangian_curvature(self, x: np.ndarray, multipliers: dict[str, np.ndarray]) -> np.ndarray:
-        """Diagonal curvature :math:`2\\lambda_k` of :math:`\\lambda_k(|U_k|^2 - 1)` on the direction entries.
+    def curvature_model(self) -> CurvatureModel:
+        """Diagonal curvature :math:`2\\lambda_k` of :math:`\\lambda_k(|U_k|^2 - 1)` on the direction entries
+        (raised to zero where negative).
 
         This is the term that keeps the subproblem from gaining thrust by turning
         :math:`U_k` along the tangent of the unit sphere (a linear model sees no cost in
         it); the other constraints' curvature is left to the trust region.
         """
-        h = np.zeros(self.num_variables)
-        lam = multipliers.get("unit_thrust_direction")
-        if lam is not None:
-            h[self._direction_columns] = 2.0 * lam[:, None]
-        return h
+        columns = self._direction_columns
+        nodes, nu = columns.shape
+
+        def values(x: np.ndarray, weights) -> np.ndarray:
+            # the unit-direction rows are the last equality block
+            return np.repeat(np.maximum(2.0 * weights.equality[-nodes:], 0.0), nu)
+
+        return CurvatureModel(columns.ravel(), columns.ravel(), values)
 
     @cached_property
     def _direction_columns(self) -> np.ndarray:
