@@ -17,6 +17,13 @@ from convexguid.ocp.attitude import rigid_body_dynamics
 INERTIA = (5621.0, 4547.0, 2364.0)
 TORQUE_MAX = 50.0
 ANGLE = math.radians(150.0)
+PUBLISHED = 28.6304
+SOURCE = "Betts, Practical Methods for Optimal Control, 2nd ed. (2010), p. 299"
+FIGURE = "final time tf [s]"
+
+
+def figure(final_state: dict[str, float], final_time: float) -> float:
+    return final_time
 
 
 def build(intervals: int = 100) -> Problem:

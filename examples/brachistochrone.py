@@ -9,6 +9,13 @@ import casadi as ca
 from convexguid.ocp import Problem
 
 G = 9.81
+PUBLISHED = 0.8243387
+SOURCE = "Bernoulli 1696: the cycloid through (2, -2) m, g = 9.81 m/s^2"
+FIGURE = "final time tf [s]"
+
+
+def figure(final_state: dict[str, float], final_time: float) -> float:
+    return final_time
 
 
 def build(intervals: int = 30) -> Problem:

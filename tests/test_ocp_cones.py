@@ -76,7 +76,8 @@ def test_the_engine_keeps_a_cone_exact():
     # the distance is flat in the angle at the optimum: the point itself is known to the root of that
     assert result.x[1:] == pytest.approx([0.6, 0.8], abs=1e-3)
     cone = program.evaluate(result.x).cones[0]
-    assert cone.violations().max() <= 1e-9
+    # exact to the convex solver's own tolerance (a linearized cone would be off by the step's square)
+    assert cone.violations().max() <= SCPSettings().backend_tolerance
 
 
 def _transfer(norm: int, target: tuple[float, float]) -> Problem:

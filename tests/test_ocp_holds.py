@@ -208,5 +208,5 @@ def test_a_path_equality_holds_between_the_nodes_of_a_hold():
     assert solution.figures.final_time_s == pytest.approx(math.sqrt(2.0), rel=1e-9)
     dense = solution.dense.columns
     assert np.abs(dense["ux"] ** 2 + dense["uy"] ** 2 - 1.0).max() <= 1e-9
-    # IPOPT on the same NLP from the same start stops at a slower local optimum (1.414285 s): no better
-    assert solution.objective <= solve_with_ipopt(transcribe(p)).objective
+    # IPOPT on the same NLP from the same start does no better (within the KKT tolerance of the objective)
+    assert solution.objective <= solve_with_ipopt(transcribe(p)).objective * (1 + 1e-6)

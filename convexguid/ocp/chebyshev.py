@@ -66,6 +66,9 @@ class MappedChebyshevProgram(Transcription):
             imposed("node", k, float(share), s.X[:, k], s.V[:, k], time)
         return defects
 
+    def control_value_shares(self) -> np.ndarray:
+        return self.node_shares()
+
     def node_controls(self, z: np.ndarray) -> np.ndarray:
         return self.control_values(z)
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -52,7 +53,7 @@ class DenseChecker:
         """The planned control as a function of time, as the transcription holds it between nodes, within its
         bounds (the actuator delivers no more: where Hermite-Simpson's quadratic overshoots a bound between nodes,
         as it does next to a switch of a bang-bang control, the flight gets the bound and the check judges that)."""
-        planned = program.control_function(z)
+        planned = program.control_function(program.unwrapped(z))
         low, high = program.problem.bounds_array(program.problem.controls)
         return lambda t: np.clip(planned(t), low, high)
 
@@ -84,8 +85,9 @@ class DenseChecker:
                 checks.append(ConstraintCheck(f"{v.name}_max", float(track.x[:, i].max()), v.upper, "max"))
             if v.lower is not None:
                 checks.append(ConstraintCheck(f"{v.name}_min", float(track.x[:, i].min()), v.lower, "min"))
-        final_errors = {f"final_{v.name}_error": abs(float(track.x[-1, i]) - v.final) / v.scale
+        final_errors = {f"final_{v.name}_error": abs(float(track.x[-1, i]) - v.final) / program.state_scales[i]
                         for i, v in enumerate(p.states) if v.final is not None}
+        final_errors |= self._boundary_errors(program, track)
         worst_final = max(final_errors.values(), default=0.0)
         passed = worst_final <= FINAL_TOLERANCE and all(c.violation <= PATH_TOLERANCE for c in checks)
         verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed,
@@ -139,6 +141,22 @@ class DenseChecker:
         return Repair(program.with_margins(Margins(path, bounds, worst_now, cone)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
                       f"margin {largest:.3g})")
+
+    @staticmethod
+    def _boundary_errors(program: Transcription, track: DenseTrack) -> dict[str, float]:
+        """Each nonlinear boundary constraint on the re-propagated first or last state, in its magnitude (the
+        transcription's: its change when every state moves by its scale), as the final-state errors are."""
+        p, errors = program.problem, {}
+        rows = iter(program.boundary_equality_rows)
+        for name, expression, at in p.boundary_constraints:
+            if p.boundary_is_affine(expression):
+                continue
+            function = ca.Function("boundary", [p.state_vector(), p.time], [expression])
+            state, time = (track.x[0], 0.0) if at == "initial" else (track.x[-1], float(track.t[-1]))
+            values = np.abs(np.asarray(function(state, time), dtype=float).ravel())
+            magnitudes = np.array([next(rows)[2] for _ in values])
+            errors[f"{at}_{name}_error"] = float(np.max(values / magnitudes))
+        return errors
 
     @staticmethod
     def _refine(program: Transcription, z: np.ndarray) -> Repair | None:

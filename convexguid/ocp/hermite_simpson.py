@@ -93,6 +93,10 @@ class HermiteSimpsonProgram(Transcription):
         imposed("node", N, 1.0, s.X[:, N], U[:, N], s.tf)
         return defects
 
+    def control_value_shares(self) -> np.ndarray:
+        nodes = np.linspace(0.0, 1.0, self.N + 1)
+        return nodes if self.linear_control else np.concatenate([nodes, (np.arange(self.N) + 0.5) / self.N])
+
     def node_controls(self, z: np.ndarray) -> np.ndarray:
         return self.control_values(z)[: self.N + 1]
 

@@ -80,6 +80,11 @@ class HoldProgram(Transcription):
             imposed("node", k, k / self.N, s.X[:, k], self._node_control(s.V, k), k * s.h)
         return defects
 
+    def control_value_shares(self) -> np.ndarray:
+        # a zero-order hold's value stands for its interval (its middle), a first-order hold's for its node
+        nodes = np.linspace(0.0, 1.0, self.N + 1)
+        return nodes if self.order == 1 else 0.5 * (nodes[:-1] + nodes[1:])
+
     def node_controls(self, z: np.ndarray) -> np.ndarray:
         values = self.control_values(z)
         return values if self.order == 1 else np.vstack([values, values[-1:]])

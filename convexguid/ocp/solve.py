@@ -71,7 +71,7 @@ def solve_problem(problem: Problem, max_iterations: int = 100, verification_poin
     with single_threaded():
         outcome = solve_verified(program, settings, DenseChecker(verification_points), log)
     final = outcome.program
-    z = outcome.x
+    z = final.unwrapped(outcome.x)
     size = ProgramSize(final.num_variables, final.N * final.nx + sum(v.initial is not None for v in problem.states)
                        + sum(v.final is not None for v in problem.states), final.num_path)
     tf = final.final_time(z)

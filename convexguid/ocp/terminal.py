@@ -40,8 +40,17 @@ def terminal_gradient(program: Transcription) -> np.ndarray:
 
 
 def terminal_scale(program: Transcription) -> float:
-    """A magnitude for the terminal cost's epigraph variable: its size at the guess's final state."""
+    """A magnitude for the terminal cost's epigraph variable: its size at the guess's final state, or the change a
+    move of every final state (and a free final time) by its own scale makes in it, whichever is larger. (Its size
+    alone fails a cost that is zero at the guess, such as COPS' catalyst mixing, :math:`-1 + x_1 + x_2`: scaled by
+    1e-6, the epigraph variable moved 1e-3 per iteration at the largest trust radius.)"""
     p = program.problem
     final = np.array([v.final if v.final is not None else (v.initial or 0.0) for v in p.states])
     tf = p.tf_guess if program.free_time else p.tf
-    return max(abs(program._terminal_value(final, tf)), 1e-6)
+    state, time = p.state_vector(), p.time
+    reach = ca.Function("reach", [state, time], [ca.jacobian(p.terminal, state), ca.jacobian(p.terminal, time)])
+    by_state, by_time = (np.abs(np.asarray(v, dtype=float)).ravel() for v in reach(final, tf))
+    change = float(by_state @ program.state_scales)
+    if program.free_time:
+        change += float(by_time[0]) * tf
+    return max(abs(program._terminal_value(final, tf)), change, 1e-6)

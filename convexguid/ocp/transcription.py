@@ -32,10 +32,8 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.ocp.curvature import ElementCurvature
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
-from convexguid.scp.problem import (ConeBlock, ConstraintBlock, CurvatureModel, Evaluation, LinearConstraints,
-                                    OutputConstraints)
+from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
@@ -96,8 +94,8 @@ class Transcription:
 
     def __init__(self, problem: Problem, margins: Margins | None = None, intervals: int | None = None) -> None:
         problem.check()
-        problem.estimate_scales()
         self.problem = problem
+        self.state_scales = problem.state_scales()
         self.N = intervals if intervals is not None else problem.intervals
         self.nx, self.nu = len(problem.states), len(problem.controls)
         self.free_time = problem.free_time
@@ -151,6 +149,27 @@ class Transcription:
         """Weights of :meth:`interval_control_columns` giving the control at ``share`` of the interval."""
         raise NotImplementedError
 
+    def control_value_shares(self) -> np.ndarray:
+        """The instant (a share of the final time) each control value stands for, in the order of ``z``."""
+        raise NotImplementedError
+
+    def unwrapped(self, z: np.ndarray) -> np.ndarray:
+        """``z`` with every periodic control's values shifted by whole periods to within half a period of the value
+        before them in time (:meth:`~convexguid.ocp.problem.Problem.control`); the same point of the program."""
+        periodic = [(j, v.period) for j, v in enumerate(self.problem.controls) if v.period is not None]
+        if not periodic:
+            return z
+        z = np.array(z, dtype=float)
+        values = self.control_values(z).copy()
+        order = np.argsort(self.control_value_shares(), kind="stable")
+        for j, period in periodic:
+            ordered = values[order, j]
+            steps = np.round(np.diff(ordered) / period)
+            ordered[1:] -= period * np.cumsum(steps)
+            values[order, j] = ordered
+        z[self.control_start: self.slack_start] = values.ravel()
+        return z
+
     def node_shares(self) -> np.ndarray:
         """Each node's time as a share of the final time (equal intervals unless a subclass says otherwise)."""
         return np.linspace(0.0, 1.0, self.N + 1)
@@ -198,7 +217,7 @@ class Transcription:
         self.rate = ca.Function("rate", [x, u, t], [p.rate_vector()])
         self.constraint_values = (ca.Function("g", [x, u, t], [ca.vertcat(*(c.expression for c in p.constraints))])
                                   if p.constraints else None)
-        self.state_scale = ca.DM([v.scale for v in p.states])
+        self.state_scale = ca.DM(self.state_scales)
         g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
         self.path_rows: list[tuple[str, int, int]] = []  # (node or mid, index, constraint) of each path row
         self.cone_rows: list[tuple[str, int, int]] = []  # the same for each stated cone where it holds
@@ -222,6 +241,7 @@ class Transcription:
                     cones.append(cone_maps[j](state, control))
 
         defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
+        equalities += self._boundary_equalities(X, tf)
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         path_equalities = ca.vertcat(*equalities) if equalities else ca.SX(0, 1)
         self.num_path = path.shape[0]
@@ -237,6 +257,28 @@ class Transcription:
         self._defect_pattern = _Pattern(ca.jacobian(defect, z).sparsity())
         self._path_pattern = _Pattern(ca.jacobian(path, z).sparsity())
         self._epigraph_pattern = _Pattern(ca.jacobian(objective, z).sparsity())
+
+    def _boundary_equalities(self, X: ca.SX, tf) -> list[ca.SX]:
+        """The nonlinear boundary constraints at the first or last node (and the final time), each divided by its
+        magnitude: the change of its value when every state moves by its own scale, at the straight-line guess
+        (so its feasibility is judged in that magnitude, as the defects are in the states' scales)."""
+        p, out = self.problem, []
+        x = p.state_vector()
+        self.boundary_equality_rows: list[tuple[str, str, float]] = []  # (name, at, magnitude) of each row
+        guess = self.states(self.initial_guess_straight())
+        for name, expression, at in p.boundary_constraints:
+            if p.boundary_is_affine(expression):
+                continue
+            node = 0 if at == "initial" else self.N
+            reach = ca.Function("reach", [x, p.time], [ca.mtimes(ca.fabs(ca.jacobian(expression, x)),
+                                                                 self.state_scale)])
+            time_guess = p.tf if p.tf is not None else p.tf_guess
+            magnitudes = np.asarray(reach(guess[node], 0.0 if node == 0 else time_guess), dtype=float).ravel()
+            magnitudes = np.where(magnitudes > 0, magnitudes, 1.0)
+            value = ca.substitute(expression, ca.vertcat(x, p.time), ca.vertcat(X[:, node], 0.0 if node == 0 else tf))
+            out.append(value / ca.DM(magnitudes))
+            self.boundary_equality_rows += [(name, at, float(m)) for m in magnitudes]
+        return out
 
     def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
         """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value: one
@@ -300,29 +342,23 @@ class Transcription:
         return ca.Function("hessian", [z, lam, mu, nu], [hessian]), _Pattern(hessian.sparsity())
 
     @cached_property
-    def _element_curvature(self) -> ElementCurvature:
-        z, equalities, path, epigraph = self._symbols
-        return ElementCurvature(z, ca.vertcat(equalities, path, epigraph))
-
-    def curvature_model(self) -> CurvatureModel:
-        """The Lagrangian's curvature made convex row by row (:mod:`convexguid.ocp.curvature`): the multipliers of
-        the equalities (defects, path equalities), then of the inequalities (path constraints, epigraph)."""
-        elements = self._element_curvature
-        return CurvatureModel(elements.rows_upper, elements.cols_upper,
-                              lambda z, w: elements.values(z, np.concatenate([w.equality, w.inequality])))
-
-    @cached_property
     def _weights_per_step(self) -> np.ndarray:
         return np.repeat(self.per_step_weights(), self.nu)
 
     # --- NonconvexProgram -----------------------------------------------------------------------------------
     def initial_guess(self) -> np.ndarray:
-        """States straight from their initial to their final values (the other given one where only one is),
-        controls at their guess (else the middle of finite bounds, else 0), the final time at its guess."""
+        """The user's node values when given (:meth:`~convexguid.ocp.problem.Problem.initial_guess`), else
+        :meth:`initial_guess_straight`."""
         p, N = self.problem, self.N
         tf = p.tf_guess if self.free_time else p.tf
         if p.guess_nodes is not None and p.guess_nodes[0].shape[0] == N + 1:
             return self.assemble(p.guess_nodes[0], self.values_from_nodes(p.guess_nodes[1]), tf)
+        return self.initial_guess_straight()
+
+    def initial_guess_straight(self) -> np.ndarray:
+        """States straight from their initial to their final values (the other given one where only one is),
+        controls at their guess (else the middle of finite bounds, else 0), the final time at its guess."""
+        p, N = self.problem, self.N
         s = np.linspace(0.0, 1.0, N + 1)[:, None]
         start = np.array([v.initial if v.initial is not None else v.final if v.final is not None else (v.guess or 0.0)
                           for v in p.states])
@@ -333,7 +369,7 @@ class Transcription:
 
     def variable_scale(self) -> np.ndarray:
         p, N = self.problem, self.N
-        states = np.array([v.scale for v in p.states])
+        states = self.state_scales
         controls = np.array([v.scale for v in p.controls])
         per_axis = self.control_values_per_axis()
         parts = [np.tile(states, N + 1), np.tile(controls, per_axis)]
@@ -381,7 +417,7 @@ class Transcription:
                     rows.append(node * nx + i)
                     values.append(value)
         A = sp.coo_matrix((np.ones(len(rows)), (np.arange(len(rows)), rows)), shape=(len(rows), n))
-        if p.boundary_constraints:
+        if any(p.boundary_is_affine(b[1]) for b in p.boundary_constraints):
             rows_b, values_b = self._boundary_rows()
             A = sp.vstack([A, rows_b]).tocoo()
             values += list(values_b)
@@ -413,6 +449,8 @@ class Transcription:
         x = p.state_vector()
         blocks, values = [], []
         for _, expression, at in p.boundary_constraints:
+            if not p.boundary_is_affine(expression):
+                continue  # a nonlinear one is an equality the engine linearizes (:meth:`_boundary_equalities`)
             node = 0 if at == "initial" else self.N
             function = ca.Function("boundary", [x], [ca.jacobian(expression, x), expression])
             gradient, offset = (np.asarray(v, dtype=float) for v in function(np.zeros(nx)))
@@ -476,7 +514,7 @@ class Transcription:
             residual_jacobian = select if jacobians else None
         equalities = (ConstraintBlock("dynamics_defects", np.asarray(defect, dtype=float).ravel(),
                                       self._defect_pattern.coo(defect_jac) if jacobians else None, "scaled state"),)
-        if self.equality_rows:
+        if self.equality_rows or self.boundary_equality_rows:
             value, jacobian = self._path_equalities(z)
             equalities += (ConstraintBlock("path_equalities", np.asarray(value, dtype=float).ravel(),
                                            self._path_equality_pattern.coo(jacobian) if jacobians else None),)

@@ -15,8 +15,9 @@ and the figures after it.
 
 Statuses: ``converged`` only when the dense check passed; ``unverified`` when the SCP converged
 but the check still fails when the budget runs out or no repair is left, naming the worst
-violations; otherwise the SCP's own status (``infeasible`` with its certificate,
-``max_iterations``, ``solver_error``).
+violations, or when a repaired program (tightened, refined) ends ``infeasible``: that certificate is of the
+repair, not of the problem as stated, and the message names the repair; otherwise the SCP's own status
+(``infeasible`` with its certificate, ``max_iterations``, ``solver_error``).
 """
 
 from __future__ import annotations
@@ -143,6 +144,12 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
                                   v.max_violation, v.final_state_error, worst_violations(v)))
         if on_round is not None:
             on_round(rounds[-1])
+        if result.status == "infeasible" and attempt > 0:
+            # the certificate is of the repaired program, whose constraints a repair tightened or whose grid it
+            # changed: the problem as stated was not proved infeasible
+            return VerifiedSolve(program, result, check, "unverified",
+                                 f"after the repair '{what}' the SCP found no feasible point ({result.message}); "
+                                 "the problem as stated is not proved infeasible", rounds)
         if result.status != "converged":
             # infeasible, max_iterations, solver_error: the check of the last iterate is reported, not repaired
             return VerifiedSolve(program, result, check, result.status, result.message, rounds)

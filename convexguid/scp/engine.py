@@ -56,11 +56,12 @@ from convexguid.scp.assembly import SubproblemAssembler
 from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
-from convexguid.scp.endgame import SecondOrderModels
+from convexguid.scp.endgame import SecondOrderModels, linearized_violation
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, jacobian_structure
 from convexguid.scp.newton import Candidate, newton_candidate
 from convexguid.scp.optimality import certified_by_least_squares, certified_here, finish_optimal, kkt_met, measure_kkt
-from convexguid.scp.policies import BackendRetry, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
+from convexguid.scp.policies import (BackendRetry, FunnelPolicy, PenaltyPolicy, SecondOrderCorrection,
+                                     TrustRegionPolicy)
 from convexguid.scp.problem import CurvatureModel, Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
 from convexguid.scp.state import IterationRecord, IterationState, SCPResult, merge_results
@@ -135,6 +136,7 @@ class SCPAlgorithm:
         self.penalty = PenaltyPolicy.from_settings(settings)
         self.correction = SecondOrderCorrection.from_settings(settings)
         self.retry = BackendRetry.from_settings(settings)
+        self.funnel = FunnelPolicy()
         self.weights, self.cost = program.residual_weights(), program.linear_cost()
         self.outputs = program.output_constraints()
         self.scale = program.variable_scale()
@@ -182,7 +184,8 @@ class SCPAlgorithm:
         rho = self.penalty.initial(self.objective_at_start) if penalty is None else penalty
         state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
                                merit=self._merit(ev, x, rho), radius=self.trust_region.initial, penalty=rho,
-                               started=started)
+                               started=started,
+                               funnel=self.funnel.initial(_penalty_sum(ev)) if self.settings.funnel else None)
         if infeasible:
             state.finish("infeasible", "certificate: " + restored.certificate)
         if self.assembler is None:
@@ -251,11 +254,6 @@ class SCPAlgorithm:
         if state.polish and self.curved is not None:
             # stalled short of the KKT tolerance: the SQP step with the convexified Lagrangian Hessian
             curved = self.curved.hessian(state)
-        if self.curvature is not None and state.multipliers is None and not self.phase1:
-            # the first iteration: one linear subproblem for the multipliers the curvature is weighted by
-            first, _ = self._solve_subproblem(state, state.raw, None)
-            if first.z is not None:
-                state.multipliers = self.assembler.multipliers(first.z)
         if self.curvature is not None and state.multipliers is not None:
             hessian = self._curvature_values(state)
         result, model = self._solve_subproblem(state, state.raw, hessian, curved)
@@ -289,6 +287,8 @@ class SCPAlgorithm:
         raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
         merit_new = self._merit(ev_new, x_new, state.penalty)
         ratio = _ratio(state.merit - merit_new, predicted)
+        linearized = linearized_violation(state.raw, self.outputs, d)
+        predicted_objective = state.objective - (model - state.penalty * linearized)
         if self.correction.wanted(ratio, state.raw):
             corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, raw_new, d),
                                                   hessian, curved)
@@ -309,7 +309,7 @@ class SCPAlgorithm:
                 # the quadratic model predicted its merit well, or it does at least as well as the first-order point
                 self._take_newton(state, newton, result)
                 return self._check_limit(state)
-        accepted = ratio >= s.accept_ratio
+        accepted, ratio = self._accepted(state, ratio, ev_new, x_new, predicted_objective, linearized)
         if accepted:
             state.x, state.merit = x_new, merit_new
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
@@ -326,6 +326,24 @@ class SCPAlgorithm:
         if self._small(state, step, predicted):
             self._stalled(state)
         return self._check_limit(state)
+
+    def _accepted(self, state: IterationState, ratio: float, ev_new: Evaluation, x_new: np.ndarray,
+                  predicted_objective: float, linearized: float) -> tuple[bool, float]:
+        """Whether the trial point is taken, and the ratio the trust region is updated with: the merit's ratio test,
+        or else the funnel (:class:`~convexguid.scp.policies.FunnelPolicy`), whose width narrows after each
+        accepted step that was mostly a reduction of the violation."""
+        accepted = ratio >= self.settings.accept_ratio
+        if state.funnel is None or self.phase1:
+            return accepted, ratio
+        violation, violation_new = _penalty_sum(state.ev), _penalty_sum(ev_new)
+        kind, funnel_ratio = self.funnel.judge(state.funnel, violation, violation_new,
+                                               state.objective - self._objective(ev_new, x_new), predicted_objective,
+                                               violation - linearized)
+        if not accepted and kind is not None:
+            accepted, ratio = True, funnel_ratio
+        if accepted and kind == "h" and violation_new < violation:
+            state.funnel = self.funnel.narrowed(state.funnel, violation, violation_new)
+        return accepted, ratio
 
     def _curvature_values(self, state: IterationState) -> np.ndarray:
         """The program's convex curvature model at the iterate, weighted by the state's multipliers."""

@@ -115,6 +115,49 @@ class PenaltyPolicy:
 
 
 @dataclass(frozen=True)
+class FunnelPolicy:
+    """A second way to accept a step: a funnel on the violation, for the steps the exact-penalty merit refuses
+    only for their constraints' curvature (Gould & Toint, "Nonlinear programming without a penalty function or a
+    filter", Math. Program. 122, 2010).
+
+    The violation :math:`h` (the merit's :math:`\\ell_1` sum) must stay below the funnel's width :math:`\\tau`, at
+    first :attr:`start_factor` times the start's violation (at least :attr:`start_floor`). A step whose model
+    predicts an objective decrease :math:`\\Delta q` large against the violation, :math:`\\Delta q^{2.3} \\ge h^{1.1}`
+    (IPOPT's switching condition: Wachter & Biegler, Math. Program. 106, 2006, eq. 19), is an *f-step*: accepted
+    when :math:`h^+ \\le \\tau` and the objective drops by at least :attr:`sufficient` of :math:`\\Delta q`. Any
+    other is an *h-step*: accepted when :math:`h^+ \\le \\tau` and the violation drops by at least
+    :attr:`sufficient` of the decrease its linearization predicted, and the funnel then narrows to
+    :math:`\\max(\\kappa \\tau, h^+ + \\tfrac12 (h - h^+))` (:math:`\\kappa` = :attr:`narrowing`).
+
+    Why: a penalty weight :math:`\\rho` above the multipliers makes the merit count a step's second-order
+    constraint error :math:`\\rho\\,|\\tfrac12 d^T \\nabla^2 c\\, d|` as a loss larger than its gain, and the trust
+    region then shrinks on steps Newton's method would take; the next subproblem removes that error.
+    """
+
+    start_factor: float = 10.0
+    start_floor: float = 1.0
+    sufficient: float = 0.1
+    narrowing: float = 0.5
+
+    def initial(self, violation: float) -> float:
+        return max(self.start_factor * violation, self.start_floor)
+
+    def judge(self, width: float, violation: float, violation_new: float, objective_drop: float,
+              predicted_objective: float, predicted_violation: float) -> tuple[str | None, float]:
+        """``("f" | "h", ratio)`` for an accepted step, ``(None, ratio)`` for a refused one; the ratio (actual over
+        predicted decrease of the objective, or of the violation) is what the trust region is updated with."""
+        if predicted_objective > 0 and predicted_objective ** 2.3 >= violation ** 1.1:
+            ratio = objective_drop / predicted_objective
+            return ("f" if violation_new <= width and ratio >= self.sufficient else None), ratio
+        ratio = (violation - violation_new) / predicted_violation if predicted_violation > 0 else -1.0
+        return ("h" if violation_new <= width and ratio >= self.sufficient else None), ratio
+
+    def narrowed(self, width: float, violation: float, violation_new: float) -> float:
+        """The width after an accepted h-step."""
+        return max(self.narrowing * width, violation_new + 0.5 * (violation - violation_new))
+
+
+@dataclass(frozen=True)
 class SecondOrderCorrection:
     """Fletcher's second-order correction, tried when a step's ratio is below ``threshold``.
 

@@ -166,8 +166,8 @@ class NonconvexProgram(Protocol):
     """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`.
 
     Optional: ``curvature_model() -> CurvatureModel``, a convex model of the Lagrangian's curvature that every
-    subproblem then carries from the first iteration (:mod:`convexguid.ocp.curvature` builds it for every
-    ``convexguid.ocp`` transcription). ``lagrangian_hessian(x, weights) -> matrix``, the exact
+    subproblem then carries once the first has given multipliers. ``lagrangian_hessian(x, weights) -> matrix``,
+    the exact
     :math:`\\sum \\omega_i \\nabla^2 r_i + \\sum \\mu_j \\nabla^2 g_j + \\sum \\lambda_k \\nabla^2 e_k` for
     :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``; without it the engine differences the
     program's Jacobians (:class:`~convexguid.scp.lagrangian.LagrangianHessian`).
@@ -229,6 +229,7 @@ class SCPSettings:
     second_order: bool = True
     second_order_violation: float = 1e-4
     kkt_tolerance: float = 1e-6
+    funnel: bool = True
 
     @classmethod
     def from_spec(cls, solver, **overrides) -> SCPSettings:

@@ -52,6 +52,8 @@ class IterationState:
     started: float
     multipliers: Multipliers | None = None
     kkt: KKTResiduals | None = None
+    funnel: float | None = None
+    """The funnel's width on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`), None without one."""
     newton_radius: float = np.inf
     working_set: WorkingSet | None = None
     escapes: int = 0
