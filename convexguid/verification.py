@@ -50,6 +50,9 @@ class Verification:
     final_errors: dict[str, float]
     passed: bool
     tolerances: dict[str, float] = field(default_factory=dict)
+    remarks: tuple[str, ...] = ()
+    """What the checker saw that may explain a failure (e.g. a control that jumps between nodes); in messages
+    only, not in the summary."""
 
     @property
     def max_violation(self) -> float:

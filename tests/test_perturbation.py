@@ -30,10 +30,12 @@ CASES = [
     pytest.param("betts_asymmetric_slew.yaml", [], 1e-4, True, id="betts-time"),
     pytest.param("guo2011_scp_energy.yaml", ["boundary.tf_from=null", "boundary.tf_s=196.8"], 1e-6, True,
                  id="guo2011-energy"),
-    # the exactly symmetric slew: the family's start is moved off the symmetry by a fixed offset (off_symmetry in
-    # families/quaternion_attitude/program.py), so it and its perturbations take one path (measured: 10 iterations
-    # each, 3.2446028 s, at inertia changes of 0 and 1e-13 ... 1e-8)
-    pytest.param("wang_multicone_time.yaml", BILIMORIA_WIE, 1e-4, True, id="bilimoria-wie-time"),
+    # the exactly symmetric slew: its first subproblem is degenerate (a face of equally good steps, not one), and
+    # which of them the interior-point solver returns moves with a 1e-12 change of the inertia; the funnel takes
+    # that first step, so the iterates reach the same optimum by different roads (measured: 3.2446028 s each, in 9,
+    # 19 and 9 iterations; a proximal term that makes every subproblem strictly convex gave one road, 23 iterations
+    # each, but moved the guo2011 minimum-time slew to another local optimum, and was not landed)
+    pytest.param("wang_multicone_time.yaml", BILIMORIA_WIE, 1e-4, False, id="bilimoria-wie-time"),
 ]
 
 

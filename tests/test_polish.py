@@ -52,7 +52,8 @@ def test_least_squares_multipliers_are_the_hand_multiplier():
 
 
 def test_a_stalled_minimum_time_slew_is_polished_to_a_kkt_point():
-    slew = [t for t in random_minimum_time_slews(PROBLEMS, 12, 19)][4]
+    # random slew #7 stalls short of the KKT tolerance on linear steps and is polished (#4 did before the funnel)
+    slew = [t for t in random_minimum_time_slews(PROBLEMS, 12, 19)][7]
     sol = solve(parse_problem(slew.problem, slew.source))
     assert sol.status == "converged" and sol.summary()["kkt"]["met"], sol.message
     assert any(r.solver_status == "curved" for r in sol.history)

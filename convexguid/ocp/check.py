@@ -43,6 +43,27 @@ class DenseTrack:
     u: np.ndarray
 
 
+JUMP_SHARE = 0.5
+"""A control whose value moves by more than this share of its range between neighbouring values is named."""
+
+
+def jumping_controls(program: Transcription, z: np.ndarray) -> tuple[str, ...]:
+    """Remarks on the controls that move by most of their range (:data:`JUMP_SHARE`) between two neighbouring
+    values in time: a transcription's optimum that chatters between node and midpoint values (COPS' hang glider on a
+    coarse Hermite-Simpson grid) satisfies the collocation equations but not the dynamics flown between them."""
+    values = program.control_values(program.unwrapped(z))[np.argsort(program.control_value_shares(), kind="stable")]
+    low, high = program.problem.bounds_array(program.problem.controls)
+    spread = np.where(np.isfinite(high - low), high - low, np.ptp(values, axis=0))
+    remarks = []
+    for j, v in enumerate(program.problem.controls):
+        jumps = np.abs(np.diff(values[:, j]))
+        count = int(np.sum(jumps > JUMP_SHARE * spread[j])) if spread[j] > 0 else 0
+        if count:
+            remarks.append(f"control {v.name} moves by more than {JUMP_SHARE:.0%} of its range between neighbouring "
+                           f"values {count} times (a plan that chatters between collocation points)")
+    return tuple(remarks)
+
+
 class DenseChecker:
     """:class:`~convexguid.scp.check_repair.PlanChecker` of a :class:`Transcription`."""
 
@@ -91,7 +112,8 @@ class DenseChecker:
         worst_final = max(final_errors.values(), default=0.0)
         passed = worst_final <= FINAL_TOLERANCE and all(c.violation <= PATH_TOLERANCE for c in checks)
         verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed,
-                                    {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE})
+                                    {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE},
+                                    () if passed else jumping_controls(program, z))
         return Check(verification, track)
 
     def repair(self, program: Transcription, z: np.ndarray, check: Check, attempt: int) -> Repair | None:

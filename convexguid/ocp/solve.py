@@ -62,8 +62,9 @@ def solve_problem(problem: Problem, max_iterations: int = 100, verification_poin
     record per SCP iteration)."""
     started = time.perf_counter()
     program = transcribe(problem)
-    if problem.objective == "time":
-        # weights in units of the guessed final time (the objective at the start)
+    if problem.objective in ("time", "terminal"):
+        # weights in units of the objective's size (the guessed final time; a terminal cost's change when the
+        # final state moves by its scales): an absolute weight let COPS' hang glider trade defects for range
         settings = SCPSettings(max_iterations=max_iterations, penalty_unit="objective", penalty=30.0, penalty_max=3e6)
     else:
         # the straight-line guess often has zero control energy: absolute weights, escalated when too small

@@ -120,7 +120,7 @@ def worst_violations(verification: Verification, count: int = 3) -> str:
                     key=lambda c: -c.violation)[:count]
     parts = [f"{c.name} {c.worst:.6g} {'>' if c.sense == 'max' else '<'} {c.bound:g}" for c in broken]
     parts += [f"{k} {v:.3g}" for k, v in verification.final_errors.items()]
-    return "; ".join(parts)
+    return "; ".join(parts + list(verification.remarks))
 
 
 def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: PlanChecker, log: Log | None = None,

@@ -147,7 +147,7 @@ class SCPAlgorithm:
         self.assembler: SubproblemAssembler | CondensedAssembler | None = None
         self.choice: SubproblemChoice | None = None
         self.backend: Backend | None = None
-        self.objective_at_start = 0.0
+        self.objective_at_start = self.objective_size = 0.0
 
     # --- evaluation -------------------------------------------------------------------------
     def _evaluate(self, state: IterationState | None, x: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
@@ -181,7 +181,10 @@ class SCPAlgorithm:
         x = x if infeasible else restored.x
         raw, ev = self._evaluate(None, x, jacobians=True)
         self.objective_at_start = self._objective(ev, x)
-        rho = self.penalty.initial(self.objective_at_start) if penalty is None else penalty
+        # the unit of the penalty weights: the objective at the start, or the change of its linear part when every
+        # variable moves by its scale, whichever is larger (a terminal cost that is zero at the start has a size)
+        self.objective_size = max(abs(self.objective_at_start), float(np.abs(self.cost) @ self.scale))
+        rho = self.penalty.initial(self.objective_size) if penalty is None else penalty
         state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
                                merit=self._merit(ev, x, rho), radius=self.trust_region.initial, penalty=rho,
                                started=started,
@@ -368,7 +371,7 @@ class SCPAlgorithm:
         """
         if self.phase1 or state.multipliers is None or self.violation(state.ev) > self.settings.second_order_violation:
             return
-        target = self.penalty.relaxed(state.penalty, state.multipliers.largest(), self.objective_at_start)
+        target = self.penalty.relaxed(state.penalty, state.multipliers.largest(), self.objective_size)
         if target is not None:
             state.penalty = target
             state.merit = self._merit(state.ev, state.x, target)
@@ -455,7 +458,7 @@ class SCPAlgorithm:
         # If the iterates drift back to an infeasible stall, the penalty is below the multipliers after all.
         nearly_feasible = max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance
         first_try = nearly_feasible and state.phase1_runs == 0
-        rho = None if first_try else self.penalty.escalated(state.penalty, self.objective_at_start)
+        rho = None if first_try else self.penalty.escalated(state.penalty, self.objective_size)
         if rho is not None:
             # A stationary point of the penalty function that violates the constraints:
             # the penalty is below the multipliers; raise it and go on.

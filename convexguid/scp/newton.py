@@ -83,7 +83,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     whole = length <= radius
     if length > radius:
         newton = replace(newton, step=newton.step * (radius / length))
-    rho = min(state.penalty, algo.penalty.following(state.multipliers.largest(), algo.objective_at_start))
+    rho = min(state.penalty, algo.penalty.following(state.multipliers.largest(), algo.objective_size))
     merit = algo.merit(state.ev, state.x, rho)
     d = newton.step * algo.scale
     predicted = merit - (state.objective + model.quadratic(newton.step)

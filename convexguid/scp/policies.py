@@ -59,10 +59,10 @@ class PenaltyPolicy:
     """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty: where it starts, how it follows the multipliers, and
     its escalation.
 
-    With ``unit = "objective"`` the configured weights are counted in units of
-    :math:`|f(x_0)|`, the objective at the start point: a weight of 30 then means "30 times
-    the start's maneuver time (or energy) per unit of constraint violation", whatever the
-    problem's scale. With ``unit = "absolute"`` they are used as given.
+    With ``unit = "objective"`` the configured weights are counted in units of the objective's size at the
+    start point: :math:`|f(x_0)|`, or the change :math:`|c|^T \\sigma` of its linear part when every variable moves
+    by its scale, whichever is larger (the engine passes it). A weight of 30 then means "30 times the start's
+    maneuver time per unit of constraint violation", whatever the problem's scale. With ``unit = "absolute"`` they are used as given.
 
     The penalty is exact for any weight above the largest multiplier :math:`\\|\\lambda\\|_\\infty` (Nocedal & Wright,
     *Numerical Optimization*, 2nd ed., Thm. 17.3); a weight far above it only makes the merit function count
@@ -87,28 +87,28 @@ class PenaltyPolicy:
     def from_settings(cls, s: SCPSettings) -> PenaltyPolicy:
         return cls(s.penalty, s.penalty_max, s.penalty_unit)
 
-    def scale(self, objective_at_start: float) -> float:
-        """The unit of the weights: 1, or :math:`|f(x_0)|` (at least 1e-12)."""
-        return max(abs(objective_at_start), 1e-12) if self.unit == "objective" else 1.0
+    def scale(self, objective_size: float) -> float:
+        """The unit of the weights: 1, or the objective's size at the start (at least 1e-12)."""
+        return max(abs(objective_size), 1e-12) if self.unit == "objective" else 1.0
 
-    def initial(self, objective_at_start: float) -> float:
-        return self.start * self.scale(objective_at_start)
+    def initial(self, objective_size: float) -> float:
+        return self.start * self.scale(objective_size)
 
-    def following(self, largest_multiplier: float, objective_at_start: float) -> float:
+    def following(self, largest_multiplier: float, objective_size: float) -> float:
         """The weight that follows the multipliers: :attr:`over_multipliers` times the largest, at least the floor."""
-        return max(self.over_multipliers * largest_multiplier, self.floor * self.initial(objective_at_start))
+        return max(self.over_multipliers * largest_multiplier, self.floor * self.initial(objective_size))
 
-    def relaxed(self, rho: float, largest_multiplier: float, objective_at_start: float) -> float | None:
+    def relaxed(self, rho: float, largest_multiplier: float, objective_size: float) -> float | None:
         """The weight :meth:`following` the multipliers if ``rho`` is more than :attr:`slack` times it, else None
         (also when no constraint is active: the largest multiplier below :attr:`inactive` times ``rho``)."""
         if largest_multiplier < self.inactive * rho:
             return None
-        target = self.following(largest_multiplier, objective_at_start)
+        target = self.following(largest_multiplier, objective_size)
         return target if rho > self.slack * target else None
 
-    def escalated(self, rho: float, objective_at_start: float) -> float | None:
+    def escalated(self, rho: float, objective_size: float) -> float | None:
         """The next weight, or ``None`` if ``rho`` is already at the maximum."""
-        ceiling = self.maximum * self.scale(objective_at_start)
+        ceiling = self.maximum * self.scale(objective_size)
         if rho >= ceiling * (1 - 1e-12):
             return None
         return min(self.factor * rho, ceiling)

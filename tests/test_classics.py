@@ -1,0 +1,151 @@
+"""Published problems stated from their papers (examples/classics/), solved from a straight-line guess with default
+settings, against the published figure and against IPOPT on the same transcription from the same guess; and the
+statements and rules they rely on (nonlinear boundary constraints, periodic controls, estimated scales, the funnel,
+honest statuses after a repair)."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from convexguid.ocp import Problem
+from convexguid.ocp.reference import solve_with_ipopt
+from convexguid.ocp.solve import transcribe
+from convexguid.scp.check_repair import Check, Repair, solve_verified
+from convexguid.scp.policies import FunnelPolicy
+from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, SCPSettings
+from convexguid.verification import Verification
+
+CLASSICS = Path(__file__).resolve().parents[1] / "examples" / "classics"
+
+
+def _module(name: str):
+    spec = importlib.util.spec_from_file_location(f"classic_{name}", CLASSICS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("name", ["particle_steering", "bryson_denham", "orbit_raising", "robot_arm"])
+def test_a_classic_reaches_its_published_figure_in_at_most_twice_ipopts_iterations(name):
+    module = _module(name)
+    solution = module.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    final = {n: float(solution.nodes.columns[n][-1]) for n in solution.figures.states}
+    assert module.figure(final, solution.figures.final_time_s) == pytest.approx(module.PUBLISHED, rel=1e-3)
+    answer = solve_with_ipopt(transcribe(module.build()))
+    assert answer.success
+    assert solution.iterations <= 2 * answer.iterations
+
+
+def test_a_nonlinear_final_condition_is_met_by_the_flown_plan():
+    """Orbit raising ends on a circular orbit, v = sqrt(1 / r): an equality of the final state the engine linearizes;
+    the dense check evaluates it on the re-propagated state."""
+    solution = _module("orbit_raising").build().solve()
+    errors = solution.verification.final_errors
+    assert "final_circular_speed_error" in errors
+    assert errors["final_circular_speed_error"] <= 1e-4
+
+
+def test_a_boundary_constraint_is_refused_with_a_control_or_the_initial_time():
+    p = Problem("refusals")
+    x = p.state("x", initial=0.0)
+    u = p.control("u")
+    with pytest.raises(Exception, match="uses a control"):
+        p.boundary_constraint("with_control", x + u)
+    with pytest.raises(Exception, match="initial instant"):
+        p.boundary_constraint("with_time", x - p.time, at="initial")
+
+
+def test_periodic_control_values_are_unwrapped_without_changing_what_the_dynamics_see():
+    p = Problem("turning")
+    x = p.state("x", initial=0.0, final=1.0)
+    phi = p.control("phi", period=2 * math.pi)
+    p.dynamics({x: ca.cos(phi)})
+    p.final_time(fixed=2.0)
+    p.minimize_energy()
+    p.transcription(4)
+    program = transcribe(p)
+    z = program.initial_guess()
+    values = np.array([0.1, 0.2 + 2 * math.pi, 0.3 - 4 * math.pi, 0.4, 0.5, 0.15, 0.25, 0.35, 0.45])
+    z[program.control_start: program.slack_start] = values
+    unwrapped = program.control_values(program.unwrapped(z))[:, 0]
+    in_time = unwrapped[np.argsort(program.control_value_shares(), kind="stable")]
+    assert np.max(np.abs(np.diff(in_time))) < math.pi
+    assert np.cos(unwrapped) == pytest.approx(np.cos(values), abs=1e-12)
+    with pytest.raises(Exception, match="period"):
+        p.control("psi", bounds=(-1.0, 1.0), period=2 * math.pi)
+
+
+def test_a_state_of_unstated_size_is_scaled_by_what_its_rate_can_do():
+    """Particle steering's y1 (no bound, boundary value 0) moves at y3, up to 45 on the straight-line guess, over the
+    guessed 1 s; y4 at 100 sin(u) across the angle's range."""
+    program = transcribe(_module("particle_steering").build())
+    assert program.state_scales == pytest.approx([45.0, 5.0, 45.0, 100.0], rel=1e-9)
+
+
+def test_the_funnel_takes_an_objective_step_inside_it_and_refuses_one_outside():
+    funnel = FunnelPolicy()
+    # predicted objective decrease 0.1 against a violation of 1e-4 (0.1^2.3 >= 1e-4^1.1): an f-step, the objective
+    # fell as predicted, the violation grew to 1e-2: inside a funnel of width 1, outside one of 1e-3
+    assert funnel.judge(1.0, 1e-4, 1e-2, 0.1, 0.1, 1e-4) == ("f", pytest.approx(1.0))
+    assert funnel.judge(1e-3, 1e-4, 1e-2, 0.1, 0.1, 1e-4)[0] is None
+    assert funnel.judge(1.0, 1e-4, 1e-2, 0.001, 0.1, 1e-4)[0] is None
+    # a large violation: an h-step, judged by the violation's decrease
+    kind, ratio = funnel.judge(10.0, 1.0, 0.5, -0.1, 1e-3, 0.8)
+    assert kind == "h" and ratio == pytest.approx(0.625)
+    assert funnel.narrowed(10.0, 1.0, 0.5) == pytest.approx(5.0)
+
+
+class _Point:
+    """min (x - 0.7)^2 subject to lower <= x <= upper (hard linear rows): infeasible when lower > upper."""
+
+    num_variables = 1
+
+    def __init__(self, lower: float, upper: float) -> None:
+        self.lower, self.upper = lower, upper
+
+    def initial_guess(self):
+        return np.array([0.0])
+
+    def variable_scale(self):
+        return np.ones(1)
+
+    def residual_weights(self):
+        return np.ones(1)
+
+    def linear_cost(self):
+        return np.zeros(1)
+
+    def linear_constraints(self):
+        return LinearConstraints(np.zeros((0, 1)), np.zeros(0), np.array([[1.0], [-1.0]]),
+                                 np.array([self.upper, -self.lower]))
+
+    def output_constraints(self):
+        return OutputConstraints.none(1)
+
+    def evaluate(self, x, jacobians=True):
+        return Evaluation(x - 0.7, np.ones((1, 1)) if jacobians else None)
+
+
+class _TighteningChecker:
+    """Fails the first plan and 'repairs' it into a contradiction, as two opposite point constraints tightened
+    by the same margin would be."""
+
+    def check(self, program, x):
+        passed = program.lower <= program.upper and program.lower > 0.5
+        return Check(Verification(1, (), 0.0, {}, passed))
+
+    def repair(self, program, x, check, attempt):
+        return Repair(_Point(1.0, 0.9), x, "both bounds tightened by 0.1")
+
+
+def test_an_infeasible_repaired_program_is_unverified_naming_the_repair():
+    outcome = solve_verified(_Point(0.0, 1.0), SCPSettings(), _TighteningChecker())
+    assert outcome.status == "unverified"
+    assert "both bounds tightened by 0.1" in outcome.message and "not proved infeasible" in outcome.message
