@@ -22,9 +22,6 @@ SOURCE = "Betts, Practical Methods for Optimal Control, 2nd ed. (2010), p. 299"
 FIGURE = "final time tf [s]"
 
 
-def figure(final_state: dict[str, float], final_time: float) -> float:
-    return final_time
-
 
 def build(intervals: int = 100) -> Problem:
     p = Problem("betts-asymmetric-slew")

@@ -14,9 +14,6 @@ SOURCE = "Bernoulli 1696: the cycloid through (2, -2) m, g = 9.81 m/s^2"
 FIGURE = "final time tf [s]"
 
 
-def figure(final_state: dict[str, float], final_time: float) -> float:
-    return final_time
-
 
 def build(intervals: int = 30) -> Problem:
     p = Problem("brachistochrone")

@@ -13,6 +13,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from convexguid.classics.bench import published_figure
 from convexguid.ocp import Problem
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
@@ -37,10 +38,20 @@ def test_a_classic_reaches_its_published_figure_in_at_most_twice_ipopts_iteratio
     solution = module.build().solve()
     assert solution.status == "converged" and solution.verification.passed, solution.message
     final = {n: float(solution.nodes.columns[n][-1]) for n in solution.figures.states}
-    assert module.figure(final, solution.figures.final_time_s) == pytest.approx(module.PUBLISHED, rel=1e-3)
+    figure = published_figure(module, final, solution.figures.final_time_s)
+    assert figure == pytest.approx(module.PUBLISHED, rel=1e-3)
     answer = solve_with_ipopt(transcribe(module.build()))
     assert answer.success
     assert solution.iterations <= 2 * answer.iterations
+
+
+def test_goddards_rocket_reaches_cops_altitude():
+    """A singular thrust arc between full thrust and coasting (COPS 3.0): converged and verified at the published
+    altitude, though in more SCP iterations than IPOPT takes (127 against 29, measured)."""
+    module = _module("goddard_rocket")
+    solution = module.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert float(solution.nodes.columns["h"][-1]) == pytest.approx(module.PUBLISHED, rel=1e-3)
 
 
 def test_a_nonlinear_final_condition_is_met_by_the_flown_plan():

@@ -1,8 +1,10 @@
 """The classics benchmark: published optimal-control problems stated from their papers, solved as a new user would.
 
-Each module of ``examples/classics/`` states one problem with :class:`convexguid.ocp.Problem` (straight-line
-guess, default settings) and gives the published figure it must reach (``PUBLISHED``, ``SOURCE``, ``FIGURE``,
-``figure(final_state, final_time)``). For each, in one run on this machine:
+Each module of ``examples/classics/`` (and each example beside it that gives a published figure) states one problem
+with :class:`convexguid.ocp.Problem` (straight-line guess, default settings) and gives the published figure it must
+reach: ``PUBLISHED``, ``SOURCE``, ``FIGURE`` and, unless the figure is the final time,
+``figure(final_state, final_time)`` computing it from the final state's values by name. For each, in one run on
+this machine:
 
 * convexguid: ``build().solve()`` in process, from the statement to the verified plan (transcription, SCP, the
   dense SciPy re-propagation and any repair rounds), its status, figure, SCP iterations and time;
@@ -89,6 +91,12 @@ def final_values(names: list[str], states) -> dict[str, float]:
     return {name: float(value) for name, value in zip(names, states, strict=True)}
 
 
+def published_figure(module: ModuleType, final_state: dict[str, float], final_time: float) -> float:
+    """The module's figure of a plan: its ``figure(final_state, final_time)``, or the final time."""
+    figure = getattr(module, "figure", None)
+    return final_time if figure is None else float(figure(final_state, final_time))
+
+
 def run_problem(module: ModuleType) -> Row:
     """convexguid and IPOPT on one problem module (see the module docstring)."""
     from convexguid.ocp.reference import solve_with_ipopt
@@ -99,13 +107,14 @@ def run_problem(module: ModuleType) -> Row:
     solution = module.build().solve()
     elapsed = time.perf_counter() - started
     names = list(solution.figures.states)
-    ours = module.figure({n: float(solution.nodes.columns[n][-1]) for n in names}, solution.figures.final_time_s)
+    ours = published_figure(module, {n: float(solution.nodes.columns[n][-1]) for n in names},
+                            solution.figures.final_time_s)
     first = module.build()
     program = transcribe(first)
     with single_threaded():
         answer = solve_with_ipopt(program)
-    theirs = module.figure(final_values([v.name for v in first.states], program.states(answer.z)[-1]),
-                           program.final_time(answer.z)) if answer.success else math.nan
+    theirs = published_figure(module, final_values([v.name for v in first.states], program.states(answer.z)[-1]),
+                              program.final_time(answer.z)) if answer.success else math.nan
     intervals = str(program.N) if len(solution.nodes.t) == program.N + 1 else f"{program.N} -> {len(solution.nodes.t) - 1}"
     return Row(name, float(module.PUBLISHED), module.SOURCE, module.FIGURE, solution.status,
                bool(solution.verification is not None and solution.verification.passed), ours, solution.iterations,

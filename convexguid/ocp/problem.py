@@ -435,7 +435,7 @@ class Problem:
     def free_time(self) -> bool:
         return self.tf_bounds is not None
 
-    def solve(self, max_iterations: int = 100, verification_points: int = 20, log=None):
+    def solve(self, max_iterations: int = 300, verification_points: int = 20, log=None):
         """Transcribe, plan by SCP, check densely with SciPy: a :class:`~convexguid.solution.Solution` (``log``: a
         function given each SCP iteration's record)."""
         from convexguid.ocp.solve import solve_problem  # the SCP engine and SciPy load at the first solve

@@ -56,7 +56,7 @@ def transcribe(problem: Problem) -> Transcription:
     return TRANSCRIPTIONS[problem.method](problem)
 
 
-def solve_problem(problem: Problem, max_iterations: int = 100, verification_points: int = 20,
+def solve_problem(problem: Problem, max_iterations: int = 300, verification_points: int = 20,
                   log: Log | None = None) -> Solution:
     """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise (``log`` gets one
     record per SCP iteration)."""

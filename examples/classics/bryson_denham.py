@@ -39,5 +39,4 @@ def build(intervals: int = 30) -> Problem:
 
 if __name__ == "__main__":
     solution = build().solve()
-    print(solution.status, solution.message, solution.iterations)
-    print(f"J = {solution.nodes.columns['J'][-1]:.6f} (Bryson & Ho: {PUBLISHED:g})")
+    print(solution.status, solution.message, solution.iterations, solution.objective)

@@ -40,6 +40,4 @@ def build(intervals: int = 50) -> Problem:
 
 if __name__ == "__main__":
     solution = build().solve()
-    print(solution.status, solution.message, solution.iterations)
-    final = {name: float(values[-1]) for name, values in solution.nodes.columns.items()}
-    print(f"-1 + x1(1) + x2(1) = {figure(final, 1.0):.6f} (COPS: {PUBLISHED})")
+    print(solution.status, solution.message, solution.iterations, solution.objective)

@@ -66,7 +66,4 @@ def build(intervals: int = 50, control: str = "linear") -> Problem:
 
 if __name__ == "__main__":
     solution = build().solve()
-    print(solution.status, solution.message, solution.iterations)
-    final = {name: float(column[-1]) for name, column in solution.nodes.columns.items()}
-    print(f"{FIGURE}: {figure(final, solution.figures.final_time_s):.4f} (published {PUBLISHED}), "
-          f"tf {solution.figures.final_time_s:.4f} s")
+    print(solution.status, solution.message, solution.iterations, solution.objective)

@@ -54,5 +54,4 @@ def build(intervals: int = 40) -> Problem:
 
 if __name__ == "__main__":
     solution = build().solve()
-    print(solution.status, solution.message, solution.iterations)
-    print(f"r(tf) = {solution.nodes.columns['r'][-1]:.5f} (Bryson & Ho: {PUBLISHED})")
+    print(solution.status, solution.message, solution.iterations, solution.objective)

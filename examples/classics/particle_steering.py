@@ -24,9 +24,6 @@ SOURCE = "COPS 3.0 (Dolan, More, Munson 2004), particle steering"
 FIGURE = "final time tf [s]"
 
 
-def figure(final_state: dict[str, float], final_time: float) -> float:
-    return final_time
-
 
 def build(intervals: int = 50) -> Problem:
     p = Problem("particle-steering")
@@ -42,5 +39,4 @@ def build(intervals: int = 50) -> Problem:
 
 if __name__ == "__main__":
     solution = build().solve()
-    print(solution.status, solution.message, solution.iterations)
-    print(f"tf = {solution.figures.final_time_s:.9f} s (COPS: {PUBLISHED})")
+    print(solution.status, solution.message, solution.iterations, solution.objective)

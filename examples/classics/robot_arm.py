@@ -26,9 +26,6 @@ SOURCE = "Dolan, More & Munson, COPS 3.0, ANL/MCS-TM-273 (2004), robot arm"
 FIGURE = "minimum final time t_f"
 
 
-def figure(final_state: dict[str, float], final_time: float) -> float:
-    return final_time
-
 
 def build(intervals: int = 40) -> Problem:
     p = Problem("cops-robot-arm")
@@ -53,5 +50,4 @@ def build(intervals: int = 40) -> Problem:
 
 if __name__ == "__main__":
     solution = build().solve()
-    print(solution.status, solution.message, solution.iterations)
-    print(f"final time {solution.figures.final_time_s:.5f} (COPS: {PUBLISHED})")
+    print(solution.status, solution.message, solution.iterations, solution.objective)

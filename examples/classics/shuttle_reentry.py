@@ -83,7 +83,4 @@ def build(intervals: int = 50, control: str = "quadratic") -> Problem:
 
 if __name__ == "__main__":
     solution = build().solve()
-    print(solution.status, solution.message, solution.iterations)
-    final = {name: float(column[-1]) for name, column in solution.nodes.columns.items()}
-    print(f"{FIGURE}: {figure(final, solution.figures.final_time_s):.4f} (published {PUBLISHED}), "
-          f"tf {solution.figures.final_time_s:.2f} s")
+    print(solution.status, solution.message, solution.iterations, solution.objective)
