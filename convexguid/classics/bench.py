@@ -115,7 +115,8 @@ def run_problem(module: ModuleType) -> Row:
         answer = solve_with_ipopt(program)
     theirs = published_figure(module, final_values([v.name for v in first.states], program.states(answer.z)[-1]),
                               program.final_time(answer.z)) if answer.success else math.nan
-    intervals = str(program.N) if len(solution.nodes.t) == program.N + 1 else f"{program.N} -> {len(solution.nodes.t) - 1}"
+    final_intervals = len(solution.nodes.t) - 1
+    intervals = str(program.N) if final_intervals == program.N else f"{program.N} -> {final_intervals}"
     return Row(name, float(module.PUBLISHED), module.SOURCE, module.FIGURE, solution.status,
                bool(solution.verification is not None and solution.verification.passed), ours, solution.iterations,
                intervals, elapsed, answer.status, theirs, answer.iterations, answer.setup_s, answer.solve_s)

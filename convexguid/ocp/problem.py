@@ -400,13 +400,12 @@ class Problem:
 
     def state_scales(self) -> np.ndarray:
         """Each state's magnitude: its scale, or, when nothing stated gives its size, the change its rate can make
-        over the horizon:
-        :math:`t_f \\max |f_i|` over the straight-line guess (at five instants) with each control at its guess and
-        across its range in turn (nine values between finite bounds), when that is above 1. The trust region is a
-        box in scaled variables, so a state of unknown size scaled by 1 could move by about 1 per iteration whatever its range
-        (measured on COPS particle steering: a position that ends near 12 held every step to 0.03-0.5, 100
-        iterations without convergence). The defects and the final-state check are measured in the same magnitude.
-        """
+        over the horizon, :math:`t_f \\max |f_i|` over the straight-line guess (at five instants) with each control
+        at its guess and across its range in turn (nine values between finite bounds), when that is above 1. The
+        trust region is a box in scaled variables, so a state of unknown size scaled by 1 could move by about 1 per
+        iteration whatever its range (measured on COPS particle steering: a position that ends near 12 held every
+        step to 0.03-0.5, 100 iterations without convergence). The defects and the final-state check are measured
+        in the same magnitude."""
         scales = np.array([v.scale for v in self.states])
         unknown = [i for i, v in enumerate(self.states) if not v.magnitude_stated]
         if not unknown:

@@ -20,11 +20,11 @@ start point into an :class:`~convexguid.scp.state.IterationState`, and each
 5. stop, or raise the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) when the
    iterates stall with constraints violated.
 
-The objective's residuals are linearized (Gauss-Newton); a program may add a convex diagonal of the
-Lagrangian's curvature (``lagrangian_curvature``, weighted by the previous subproblem's multipliers: an
-S :math:`\\ell_1` QP step, Fletcher 1985). Near a feasible point the end game (:mod:`convexguid.scp.newton`)
-also proposes Newton's step on the working set the subproblems agree on, with the exact Hessian of the
-Lagrangian, where a linear model alone would crawl at a linear rate whenever the optimum is not a vertex.
+The objective's residuals are linearized (Gauss-Newton); a program may add a convex model of its constraints'
+curvature (``curvature_model``, weighted by the last multipliers: an S :math:`\\ell_1` QP step, Fletcher 1985). A
+step the merit refuses may still be taken by a funnel on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`).
+Near a feasible point the end game (:mod:`convexguid.scp.newton`) also proposes Newton's step on the working set the
+subproblems agree on, with the exact Hessian of the Lagrangian.
 
 Statuses (:mod:`convexguid.scp.optimality`): ``converged`` only when the KKT conditions hold at a feasible
 iterate (:mod:`convexguid.scp.kkt`, stationarity and complementarity relative to the objective within
@@ -58,10 +58,17 @@ from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
 from convexguid.scp.endgame import SecondOrderModels, linearized_violation
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, jacobian_structure
+from convexguid.scp.merit import (
+    decrease_ratio,
+    describe_violations,
+    max_violation,
+    objective_value,
+    penalty_sum,
+    violation_by_block,
+)
 from convexguid.scp.newton import Candidate, newton_candidate
 from convexguid.scp.optimality import certified_by_least_squares, certified_here, finish_optimal, kkt_met, measure_kkt
-from convexguid.scp.policies import (BackendRetry, FunnelPolicy, PenaltyPolicy, SecondOrderCorrection,
-                                     TrustRegionPolicy)
+from convexguid.scp.policies import BackendRetry, FunnelPolicy, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import CurvatureModel, Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import ElasticPhase1, restore_start
 from convexguid.scp.state import IterationRecord, IterationState, SCPResult, merge_results
@@ -87,39 +94,6 @@ POLISH_ITERATIONS = 20
 :mod:`convexguid.scp.curved`, Newton's steps) until it has stalled this many times more; then it is reported
 ``unverified`` with the residuals named. Measured on the random minimum-time slew that needed it most (robustness
 benchmark, slew #4): 14 more iterations to the KKT tolerance, 5e-6 below where the linear model had stopped."""
-
-
-def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
-    """:math:`f(x) = \\sum_i w_i r_i^2 + c^T x`."""
-    return float(weights @ ev.residuals**2 + cost @ x)
-
-
-def violation_by_block(ev: Evaluation) -> dict[str, float]:
-    """Worst violation of each nonlinear constraint block, in its own unit."""
-    out = {b.name: float(np.max(b.values, initial=0.0)) for b in ev.inequalities}
-    out.update({b.name: float(np.max(np.abs(b.values), initial=0.0)) for b in ev.equalities})
-    return {k: max(v, 0.0) for k, v in out.items()}
-
-
-def max_violation(ev: Evaluation) -> float:
-    return max(violation_by_block(ev).values(), default=0.0)
-
-
-def describe_violations(ev: Evaluation) -> str:
-    """``"name by value unit; ..."`` for every violated block, or ``"none"``."""
-    units = {b.name: b.unit for b in (*ev.inequalities, *ev.equalities)}
-    parts = [f"{k} by {v:.3g} {units[k]}".rstrip() for k, v in violation_by_block(ev).items() if v > 0]
-    return "; ".join(parts) or "none"
-
-
-def _penalty_sum(ev: Evaluation) -> float:
-    total = sum(float(np.maximum(b.values, 0.0).sum()) for b in ev.inequalities)
-    return total + sum(float(np.abs(b.values).sum()) for b in ev.equalities)
-
-
-def _ratio(actual: float, predicted: float) -> float:
-    """Actual over predicted decrease of the merit function."""
-    return actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
 
 
 class SCPAlgorithm:
@@ -165,7 +139,7 @@ class SCPAlgorithm:
         return objective_value(ev, self.weights, self.cost, x)
 
     def _merit(self, ev: Evaluation, x: np.ndarray, rho: float) -> float:
-        return self._objective(ev, x) + rho * _penalty_sum(ev)
+        return self._objective(ev, x) + rho * penalty_sum(ev)
 
     # --- the loop ---------------------------------------------------------------------------
     def initialize(self, x0: np.ndarray | None = None, penalty: float | None = None) -> IterationState:
@@ -188,7 +162,7 @@ class SCPAlgorithm:
         state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
                                merit=self._merit(ev, x, rho), radius=self.trust_region.initial, penalty=rho,
                                started=started,
-                               funnel=self.funnel.initial(_penalty_sum(ev)) if self.settings.funnel else None)
+                               funnel=self.funnel.initial(penalty_sum(ev)) if self.settings.funnel else None)
         if infeasible:
             state.finish("infeasible", "certificate: " + restored.certificate)
         if self.assembler is None:
@@ -289,7 +263,7 @@ class SCPAlgorithm:
         x_new = state.x + d
         raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
         merit_new = self._merit(ev_new, x_new, state.penalty)
-        ratio = _ratio(state.merit - merit_new, predicted)
+        ratio = decrease_ratio(state.merit - merit_new, predicted)
         linearized = linearized_violation(state.raw, self.outputs, d)
         predicted_objective = state.objective - (model - state.penalty * linearized)
         if self.correction.wanted(ratio, state.raw):
@@ -299,7 +273,7 @@ class SCPAlgorithm:
                 x_soc = state.x + assembler.step(corrected.x)
                 _, ev_soc = self._evaluate(state, x_soc, jacobians=False)
                 merit_soc = self._merit(ev_soc, x_soc, state.penalty)
-                ratio_soc = _ratio(state.merit - merit_soc, predicted)
+                ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
                 if ratio_soc > ratio:
                     x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
                     d = x_new - state.x
@@ -312,7 +286,13 @@ class SCPAlgorithm:
                 # the quadratic model predicted its merit well, or it does at least as well as the first-order point
                 self._take_newton(state, newton, result)
                 return self._check_limit(state)
-        accepted, ratio = self._accepted(state, ratio, ev_new, x_new, predicted_objective, linearized)
+        accepted = ratio >= s.accept_ratio
+        if state.funnel is not None and not self.phase1:
+            # the merit's ratio test, or else the funnel (its ratio then updates the radius)
+            violation = penalty_sum(state.ev)
+            accepted, ratio, state.funnel = self.funnel.decide(
+                state.funnel, accepted, ratio, violation, penalty_sum(ev_new),
+                state.objective - self._objective(ev_new, x_new), predicted_objective, violation - linearized)
         if accepted:
             state.x, state.merit = x_new, merit_new
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
@@ -329,24 +309,6 @@ class SCPAlgorithm:
         if self._small(state, step, predicted):
             self._stalled(state)
         return self._check_limit(state)
-
-    def _accepted(self, state: IterationState, ratio: float, ev_new: Evaluation, x_new: np.ndarray,
-                  predicted_objective: float, linearized: float) -> tuple[bool, float]:
-        """Whether the trial point is taken, and the ratio the trust region is updated with: the merit's ratio test,
-        or else the funnel (:class:`~convexguid.scp.policies.FunnelPolicy`), whose width narrows after each
-        accepted step that was mostly a reduction of the violation."""
-        accepted = ratio >= self.settings.accept_ratio
-        if state.funnel is None or self.phase1:
-            return accepted, ratio
-        violation, violation_new = _penalty_sum(state.ev), _penalty_sum(ev_new)
-        kind, funnel_ratio = self.funnel.judge(state.funnel, violation, violation_new,
-                                               state.objective - self._objective(ev_new, x_new), predicted_objective,
-                                               violation - linearized)
-        if not accepted and kind is not None:
-            accepted, ratio = True, funnel_ratio
-        if accepted and kind == "h" and violation_new < violation:
-            state.funnel = self.funnel.narrowed(state.funnel, violation, violation_new)
-        return accepted, ratio
 
     def _curvature_values(self, state: IterationState) -> np.ndarray:
         """The program's convex curvature model at the iterate, weighted by the state's multipliers."""
@@ -398,7 +360,7 @@ class SCPAlgorithm:
         state.merit = self._merit(state.ev, x, penalty)
 
     merit = _merit
-    ratio = staticmethod(_ratio)
+    ratio = staticmethod(decrease_ratio)
     violation = staticmethod(max_violation)
 
     def _take_newton(self, state: IterationState, newton: Candidate, result: BackendResult) -> None:

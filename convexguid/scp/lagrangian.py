@@ -88,16 +88,6 @@ class Multipliers:
         """:math:`\\omega = 2 W r + M^T \\nu`: the weight of each residual's curvature in the Lagrangian."""
         return 2.0 * weights * residuals + (outputs_M.T @ self.output if self.output.size else 0.0)
 
-    def by_block(self, ev: Evaluation) -> dict[str, np.ndarray]:
-        """Equality and inequality multipliers by block name."""
-        out = {}
-        for blocks, values in ((ev.equalities, self.equality), (ev.inequalities, self.inequality)):
-            start = 0
-            for block in blocks:
-                out[block.name] = values[start: start + block.values.size]
-                start += block.values.size
-        return out
-
 
 @dataclass(frozen=True)
 class CurvatureWeights:

@@ -62,7 +62,8 @@ class PenaltyPolicy:
     With ``unit = "objective"`` the configured weights are counted in units of the objective's size at the
     start point: :math:`|f(x_0)|`, or the change :math:`|c|^T \\sigma` of its linear part when every variable moves
     by its scale, whichever is larger (the engine passes it). A weight of 30 then means "30 times the start's
-    maneuver time per unit of constraint violation", whatever the problem's scale. With ``unit = "absolute"`` they are used as given.
+    maneuver time per unit of constraint violation", whatever the problem's scale. With ``unit = "absolute"`` they
+    are used as given.
 
     The penalty is exact for any weight above the largest multiplier :math:`\\|\\lambda\\|_\\infty` (Nocedal & Wright,
     *Numerical Optimization*, 2nd ed., Thm. 17.3); a weight far above it only makes the merit function count
@@ -155,6 +156,18 @@ class FunnelPolicy:
     def narrowed(self, width: float, violation: float, violation_new: float) -> float:
         """The width after an accepted h-step."""
         return max(self.narrowing * width, violation_new + 0.5 * (violation - violation_new))
+
+    def decide(self, width: float, merit_accepts: bool, merit_ratio: float, violation: float, violation_new: float,
+               objective_drop: float, predicted_objective: float,
+               predicted_violation: float) -> tuple[bool, float, float]:
+        """``(accepted, ratio, width)``: a step the merit's ratio test accepts, or else one :meth:`judge` accepts
+        (with its ratio), and the funnel's width after it (narrowed by an accepted h-step)."""
+        kind, ratio = self.judge(width, violation, violation_new, objective_drop, predicted_objective,
+                                 predicted_violation)
+        accepted = merit_accepts or kind is not None
+        if accepted and kind == "h" and violation_new < violation:
+            width = self.narrowed(width, violation, violation_new)
+        return accepted, (ratio if accepted and not merit_accepts else merit_ratio), width
 
 
 @dataclass(frozen=True)

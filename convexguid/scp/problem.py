@@ -20,8 +20,8 @@ A formulation implements :class:`NonconvexProgram`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
 from collections.abc import Callable
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np

@@ -1,0 +1,42 @@
+"""The measures the SCP engine judges an iterate by: the objective, the violation of each constraint block, and
+the exact-penalty merit's ingredients (:mod:`convexguid.scp.engine`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from convexguid.scp.problem import Evaluation
+
+
+def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
+    """:math:`f(x) = \\sum_i w_i r_i^2 + c^T x`."""
+    return float(weights @ ev.residuals**2 + cost @ x)
+
+
+def violation_by_block(ev: Evaluation) -> dict[str, float]:
+    """Worst violation of each nonlinear constraint block, in its own unit."""
+    out = {b.name: float(np.max(b.values, initial=0.0)) for b in ev.inequalities}
+    out.update({b.name: float(np.max(np.abs(b.values), initial=0.0)) for b in ev.equalities})
+    return {k: max(v, 0.0) for k, v in out.items()}
+
+
+def max_violation(ev: Evaluation) -> float:
+    return max(violation_by_block(ev).values(), default=0.0)
+
+
+def describe_violations(ev: Evaluation) -> str:
+    """``"name by value unit; ..."`` for every violated block, or ``"none"``."""
+    units = {b.name: b.unit for b in (*ev.inequalities, *ev.equalities)}
+    parts = [f"{k} by {v:.3g} {units[k]}".rstrip() for k, v in violation_by_block(ev).items() if v > 0]
+    return "; ".join(parts) or "none"
+
+
+def penalty_sum(ev: Evaluation) -> float:
+    """The :math:`\\ell_1` violation :math:`\\sum \\max(0, g) + \\sum |e|` the merit weighs."""
+    total = sum(float(np.maximum(b.values, 0.0).sum()) for b in ev.inequalities)
+    return total + sum(float(np.abs(b.values).sum()) for b in ev.equalities)
+
+
+def decrease_ratio(actual: float, predicted: float) -> float:
+    """Actual over predicted decrease of the merit function."""
+    return actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
