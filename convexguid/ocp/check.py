@@ -13,10 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from convexguid.ocp.boundary import boundary_errors
 from convexguid.ocp.transcription import Margins, Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
@@ -108,7 +108,7 @@ class DenseChecker:
                 checks.append(ConstraintCheck(f"{v.name}_min", float(track.x[:, i].min()), v.lower, "min"))
         final_errors = {f"final_{v.name}_error": abs(float(track.x[-1, i]) - v.final) / program.state_scales[i]
                         for i, v in enumerate(p.states) if v.final is not None}
-        final_errors |= self._boundary_errors(program, track)
+        final_errors |= boundary_errors(program, track.x, float(track.t[-1]))
         worst_final = max(final_errors.values(), default=0.0)
         passed = worst_final <= FINAL_TOLERANCE and all(c.violation <= PATH_TOLERANCE for c in checks)
         verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed,
@@ -163,22 +163,6 @@ class DenseChecker:
         return Repair(program.with_margins(Margins(path, bounds, worst_now, cone)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
                       f"margin {largest:.3g})")
-
-    @staticmethod
-    def _boundary_errors(program: Transcription, track: DenseTrack) -> dict[str, float]:
-        """Each nonlinear boundary constraint on the re-propagated first or last state, in its magnitude (the
-        transcription's: its change when every state moves by its scale), as the final-state errors are."""
-        p, errors = program.problem, {}
-        rows = iter(program.boundary_equality_rows)
-        for name, expression, at in p.boundary_constraints:
-            if p.boundary_is_affine(expression):
-                continue
-            function = ca.Function("boundary", [p.state_vector(), p.time], [expression])
-            state, time = (track.x[0], 0.0) if at == "initial" else (track.x[-1], float(track.t[-1]))
-            values = np.abs(np.asarray(function(state, time), dtype=float).ravel())
-            magnitudes = np.array([next(rows)[2] for _ in values])
-            errors[f"{at}_{name}_error"] = float(np.max(values / magnitudes))
-        return errors
 
     @staticmethod
     def _refine(program: Transcription, z: np.ndarray) -> Repair | None:

@@ -41,11 +41,12 @@ def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: 
     defects, _ = program._defects(z)
     path, _ = program._path(z)
     path_equalities, _ = program._path_equalities(z)
+    boundary_equalities, _ = program._boundary_equalities(z)
     epigraph, _ = program._objective_epigraph(z)
     lin = program.linear_constraints()
     A, G = ca.DM(lin.A.toarray()), ca.DM(lin.G.toarray())
-    blocks = [(defects, 0.0, 0.0), (path_equalities, 0.0, 0.0), (path + ca.DM(program.margins.path), -np.inf, 0.0),
-              (epigraph, -np.inf, 0.0),
+    blocks = [(defects, 0.0, 0.0), (path_equalities, 0.0, 0.0), (boundary_equalities, 0.0, 0.0),
+              (path + ca.DM(program.margins.path), -np.inf, 0.0), (epigraph, -np.inf, 0.0),
               (A @ z - lin.b, 0.0, 0.0), (G @ z - lin.h, -np.inf, 0.0)]
     cones = program.evaluate(np.zeros(program.num_variables)).cones
     for cone in cones:

@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
 from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 
@@ -241,44 +242,24 @@ class Transcription:
                     cones.append(cone_maps[j](state, control))
 
         defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
-        equalities += self._boundary_equalities(X, tf)
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         path_equalities = ca.vertcat(*equalities) if equalities else ca.SX(0, 1)
+        boundary, self.boundary_equality_rows = nonlinear_equalities(self, X, tf)
         self.num_path = path.shape[0]
         self._path_equalities = ca.Function("path_equalities", [z], [path_equalities,
                                                                       ca.jacobian(path_equalities, z)])
         self._path_equality_pattern = _Pattern(ca.jacobian(path_equalities, z).sparsity())
+        self._boundary_equalities = ca.Function("boundary_equalities", [z], [boundary, ca.jacobian(boundary, z)])
+        self._boundary_pattern = _Pattern(ca.jacobian(boundary, z).sparsity())
         self._build_cones(z, V, cones)
         objective = self._epigraph(z, X[:, N], tf) if self.epigraph else ca.SX(0, 1)
-        self._symbols = (z, ca.vertcat(defect, path_equalities), path, objective)
+        self._symbols = (z, ca.vertcat(defect, path_equalities, boundary), path, objective)
         self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
         self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
         self._objective_epigraph = ca.Function("epigraph", [z], [objective, ca.jacobian(objective, z)])
         self._defect_pattern = _Pattern(ca.jacobian(defect, z).sparsity())
         self._path_pattern = _Pattern(ca.jacobian(path, z).sparsity())
         self._epigraph_pattern = _Pattern(ca.jacobian(objective, z).sparsity())
-
-    def _boundary_equalities(self, X: ca.SX, tf) -> list[ca.SX]:
-        """The nonlinear boundary constraints at the first or last node (and the final time), each divided by its
-        magnitude: the change of its value when every state moves by its own scale, at the straight-line guess
-        (so its feasibility is judged in that magnitude, as the defects are in the states' scales)."""
-        p, out = self.problem, []
-        x = p.state_vector()
-        self.boundary_equality_rows: list[tuple[str, str, float]] = []  # (name, at, magnitude) of each row
-        guess = self.states(self.initial_guess_straight())
-        for name, expression, at in p.boundary_constraints:
-            if p.boundary_is_affine(expression):
-                continue
-            node = 0 if at == "initial" else self.N
-            reach = ca.Function("reach", [x, p.time], [ca.mtimes(ca.fabs(ca.jacobian(expression, x)),
-                                                                 self.state_scale)])
-            time_guess = p.tf if p.tf is not None else p.tf_guess
-            magnitudes = np.asarray(reach(guess[node], 0.0 if node == 0 else time_guess), dtype=float).ravel()
-            magnitudes = np.where(magnitudes > 0, magnitudes, 1.0)
-            value = ca.substitute(expression, ca.vertcat(x, p.time), ca.vertcat(X[:, node], 0.0 if node == 0 else tf))
-            out.append(value / ca.DM(magnitudes))
-            self.boundary_equality_rows += [(name, at, float(m)) for m in magnitudes]
-        return out
 
     def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
         """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value: one
@@ -417,10 +398,10 @@ class Transcription:
                     rows.append(node * nx + i)
                     values.append(value)
         A = sp.coo_matrix((np.ones(len(rows)), (np.arange(len(rows)), rows)), shape=(len(rows), n))
-        if any(p.boundary_is_affine(b[1]) for b in p.boundary_constraints):
-            rows_b, values_b = self._boundary_rows()
-            A = sp.vstack([A, rows_b]).tocoo()
-            values += list(values_b)
+        boundary = affine_rows(self)
+        if boundary is not None:
+            A = sp.vstack([A, boundary[0]]).tocoo()
+            values += list(boundary[1])
         low, high = self._bounds()
         upper, lower = np.flatnonzero(np.isfinite(high)), np.flatnonzero(np.isfinite(low))
         blocks = [sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
@@ -442,23 +423,6 @@ class Transcription:
                             self._interpolated_control_limits(),
                             np.zeros(2 * self.num_slacks if self.fuel_norm == 1 else 0)])
         return LinearConstraints(A, np.array(values, dtype=float), G.tocoo(), h)
-
-    def _boundary_rows(self) -> tuple[sp.coo_matrix, np.ndarray]:
-        """The affine boundary constraints ``a^T x_0 + c = 0`` or ``a^T x_N + c = 0`` as rows ``A z = b``."""
-        p, nx = self.problem, self.nx
-        x = p.state_vector()
-        blocks, values = [], []
-        for _, expression, at in p.boundary_constraints:
-            if not p.boundary_is_affine(expression):
-                continue  # a nonlinear one is an equality the engine linearizes (:meth:`_boundary_equalities`)
-            node = 0 if at == "initial" else self.N
-            function = ca.Function("boundary", [x], [ca.jacobian(expression, x), expression])
-            gradient, offset = (np.asarray(v, dtype=float) for v in function(np.zeros(nx)))
-            block = np.zeros((gradient.shape[0], self.num_variables))
-            block[:, node * nx: (node + 1) * nx] = gradient
-            blocks.append(block)
-            values.append(-offset.ravel())
-        return sp.coo_matrix(np.vstack(blocks)), np.concatenate(values)
 
     def _interpolated_control_bounds(self) -> list[sp.coo_matrix]:
         """Rows ``+-(sum_i a_i v_i)``: the control's interpolant at :data:`INTERPOLATION_SAMPLES` for every bounded
@@ -514,10 +478,14 @@ class Transcription:
             residual_jacobian = select if jacobians else None
         equalities = (ConstraintBlock("dynamics_defects", np.asarray(defect, dtype=float).ravel(),
                                       self._defect_pattern.coo(defect_jac) if jacobians else None, "scaled state"),)
-        if self.equality_rows or self.boundary_equality_rows:
+        if self.equality_rows:
             value, jacobian = self._path_equalities(z)
             equalities += (ConstraintBlock("path_equalities", np.asarray(value, dtype=float).ravel(),
                                            self._path_equality_pattern.coo(jacobian) if jacobians else None),)
+        if self.boundary_equality_rows:
+            value, jacobian = self._boundary_equalities(z)
+            equalities += (ConstraintBlock("boundary_equalities", np.asarray(value, dtype=float).ravel(),
+                                           self._boundary_pattern.coo(jacobian) if jacobians else None),)
         inequalities = ()
         if self.num_path:
             values = np.asarray(path, dtype=float).ravel() + self.margins.path
