@@ -46,7 +46,7 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--nodes", type=int, nargs="+",
                        help="discretization sizes to time (default: the family's own list)")
     bench.add_argument("--repeat", type=int, default=3, help="timed runs per case (best is reported)")
-    bench.add_argument("--backends", nargs="+", default=["clarabel", "osqp"])
+    bench.add_argument("--backends", nargs="+", default=["auto", "clarabel", "osqp"])
     bench.add_argument("--runs", type=int, default=20,
                        help="lpmpc files: Monte Carlo runs of the correction comparison")
     bench.add_argument("--output", type=Path, help="also write the table (markdown) here")
