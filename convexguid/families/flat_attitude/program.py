@@ -224,10 +224,9 @@ class FlatAttitudeProgram:
             blocks.append(ConstraintBlock(f"keep_out_{cone.name}", values, jac, "cos"))
         return Evaluation(u.ravel(), jac_u, tuple(blocks))
 
-
     def lagrangian_hessian(self, x: np.ndarray, weights) -> np.ndarray:
-        """The curvature :math:`\\sum_k \\omega_k^T \\nabla^2 u_k + \\sum_p \\mu_p \\nabla^2 c_p` of the torques (eq. 12)
-        and the cone constraints (eq. 31), assembled from their local Hessians.
+        """The curvature :math:`\\sum_k \\omega_k^T \\nabla^2 u_k + \\sum_p \\mu_p \\nabla^2 c_p` of the torques
+        (eq. 12) and the cone constraints (eq. 31), assembled from their local Hessians.
 
         Each torque depends on its node's :math:`(\\zeta_k, \\dot\\zeta_k, \\ddot\\zeta_k) = S_k \\zeta`, linear in the
         design vector (:math:`S_k` the node's row of the identity, of :math:`s D` and of :math:`s^2 D^{(2)}`), so
@@ -235,8 +234,7 @@ class FlatAttitudeProgram:
         :math:`\\omega_k^T \\Gamma_u`; likewise each cone at a path point through the interpolation row. The local
         Hessians are forward differences of the complex-step local Jacobians: a few vectorized calls instead of
         one evaluation of the whole program per column (the engine's generic differencing)."""
-        p, s = self.problem, self.problem.time_scale
-        n1 = self.num_nodes
+        p, n1 = self.problem, self.num_nodes
         z, zd, zdd = p.flat_derivatives(x)
         omega = np.asarray(weights.residual, dtype=float).reshape(n1, 3)
         local = _weighted_local_hessian(lambda a, b, c: flat_torque(p.inertia, a, b, c), (z, zd, zdd), omega)
