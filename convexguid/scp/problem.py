@@ -206,7 +206,9 @@ class SCPSettings:
     ``iterative_refinement`` refines the interior-point backend's KKT solves (Clarabel's default);
     a family turns it off where that is measured to change only the time. ``second_order`` puts the
     Lagrangian's curvature into the subproblem (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance``
-    bounds the relative stationarity and complementarity at convergence (:mod:`convexguid.scp.kkt`).
+    bounds the relative stationarity and complementarity at convergence (:mod:`convexguid.scp.kkt`). ``funnel``
+    lets a funnel on the violation take steps the merit's ratio test refuses
+    (:class:`~convexguid.scp.policies.FunnelPolicy`).
     """
 
     backend: str = "auto"
