@@ -160,3 +160,24 @@ def test_an_infeasible_repaired_program_is_unverified_naming_the_repair():
     outcome = solve_verified(_Point(0.0, 1.0), SCPSettings(), _TighteningChecker())
     assert outcome.status == "unverified"
     assert "both bounds tightened by 0.1" in outcome.message and "not proved infeasible" in outcome.message
+
+
+def test_a_failed_check_names_a_control_that_jumps_across_its_range():
+    """A plan whose control alternates between its bounds from one value to the next (a chattering optimum) is named
+    in the check's remarks; a smooth one is not."""
+    from convexguid.ocp.check import jumping_controls
+
+    p = Problem("chatter")
+    x = p.state("x", initial=0.0, final=1.0)
+    u = p.control("u", bounds=(0.0, 2.0))
+    p.dynamics({x: u})
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(6)
+    program = transcribe(p)
+    z = program.initial_guess()
+    assert jumping_controls(program, z) == ()
+    shares = program.control_value_shares()
+    z[program.control_start: program.slack_start] = np.where(np.argsort(np.argsort(shares)) % 2 == 0, 0.0, 2.0)
+    (remark,) = jumping_controls(program, z)
+    assert remark.startswith("control u moves by more than 50% of its range")

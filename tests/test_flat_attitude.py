@@ -99,3 +99,27 @@ def test_impossible_slew_ends_infeasible_with_a_certificate():
     assert sol.status == "infeasible", f"{sol.status}: {sol.message}"
     assert "certificate" in sol.message and "torque_Nm" in sol.message, sol.message
     assert not sol.ok
+
+
+def test_lagrangian_hessian_from_local_hessians_matches_the_generic_differencing():
+    """The flat program's Hessian, assembled from the torque map's and the sun cone's local Hessians, against the
+    engine's differencing of the whole program's Jacobians, at a point off the guess with random multipliers."""
+    from convexguid.scp.lagrangian import CurvatureWeights, LagrangianHessian
+
+    sun_active = Path(PAPER).with_name("cai2018_flat_attitude_sun_active.yaml")
+    program = FlatAttitudeProgram(build_problem(load_problem(sun_active)))
+    x = program.initial_guess() + 0.01 * np.sin(np.arange(program.num_variables))
+    ev = program.evaluate(x)
+    rng = np.random.default_rng(0)
+    n_ineq = sum(b.values.size for b in ev.inequalities)
+    assert n_ineq > 0
+    for residual in (rng.normal(size=ev.residuals.size), np.zeros(ev.residuals.size)):
+        weights = CurvatureWeights(residual, np.abs(rng.normal(size=n_ineq)), np.zeros(0))
+
+        class Differenced:  # the same program without its Hessian hook: the engine then differences it
+            num_variables = program.num_variables
+            evaluate = staticmethod(program.evaluate)
+
+        generic = LagrangianHessian(Differenced(), ev, np.ones(program.num_variables)).curvature(x, weights).toarray()
+        local = program.lagrangian_hessian(x, weights)
+        assert np.abs(local - generic).max() <= 1e-6 * np.abs(generic).max()

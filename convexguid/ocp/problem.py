@@ -49,7 +49,7 @@ class Variable:
     :meth:`Problem.control`."""
     magnitude_stated: bool = True
     """False when nothing stated gives the variable's size (no scale, no bound, no nonzero boundary value): a state's
-    scale is then estimated from its rate (:meth:`Problem.estimate_scales`)."""
+    scale is then estimated from its rate (:meth:`Problem.state_scales`)."""
 
 
 @dataclass(frozen=True)
@@ -130,14 +130,15 @@ class Problem:
                 raise SpecError(f"{where}: {label} value {value:g} is outside its bounds "
                                 f"[{lower if lower is not None else '-inf'}, {upper if upper is not None else 'inf'}]")
         magnitudes = [abs(v) for v in (lower, upper, initial, final) if v is not None]
-        scale = _number(f"{where}: scale", scale) or max([*magnitudes, 0.0]) or 1.0
+        stated = _number(f"{where}: scale", scale)
+        scale = stated or max([*magnitudes, 0.0]) or 1.0
         if scale <= 0:
             raise SpecError(f"{where}: scale: must be positive (got {scale:g})")
         if not isinstance(unit, str):
             raise SpecError(f"{where}: unit: expected a string such as 'm/s' (got {unit!r})")
         return Variable(name, ca.SX.sym(name), lower, upper, initial, final, scale,
-                        _number(f"{where}: guess", guess), unit, magnitude_stated=bool(max([*magnitudes, 0.0]))
-                        or scale != 1.0)
+                        _number(f"{where}: guess", guess), unit,
+                        magnitude_stated=stated is not None or any(m > 0 for m in magnitudes))
 
     def state(self, name: str, bounds: tuple[float | None, float | None] | None = None, initial: float | None = None,
               final: float | None = None, scale: float | None = None, unit: str = "") -> ca.SX:
@@ -398,6 +399,17 @@ class Problem:
                 raise SpecError(f"{self.name}: {label}: uses {', '.join(unknown)}, which is not a state or control "
                                 "of this problem")
 
+    def straight_line(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The straight-line guess: each state's first and last value (its initial and final ones, the other given
+        one where only one is, else its guess or 0) and each control's value (its guess, else the middle of finite
+        bounds, else 0)."""
+        start = np.array([v.initial if v.initial is not None else v.final if v.final is not None else (v.guess or 0.0)
+                          for v in self.states])
+        end = np.array([v.final if v.final is not None else start[i] for i, v in enumerate(self.states)])
+        control = np.array([v.guess if v.guess is not None else 0.5 * (v.lower + v.upper)
+                            if v.lower is not None and v.upper is not None else 0.0 for v in self.controls])
+        return start, end, control
+
     def state_scales(self) -> np.ndarray:
         """Each state's magnitude: its scale, or, when nothing stated gives its size, the change its rate can make
         over the horizon, :math:`t_f \\max |f_i|` over the straight-line guess (at five instants) with each control
@@ -411,11 +423,7 @@ class Problem:
         if not unknown:
             return scales
         horizon = self.tf if self.tf is not None else self.tf_guess
-        start = np.array([v.initial if v.initial is not None else v.final if v.final is not None else 0.0
-                          for v in self.states])
-        end = np.array([v.final if v.final is not None else start[i] for i, v in enumerate(self.states)])
-        guess = np.array([v.guess if v.guess is not None else 0.5 * (v.lower + v.upper)
-                          if v.lower is not None and v.upper is not None else 0.0 for v in self.controls])
+        start, end, guess = self.straight_line()
         samples = [guess]
         for j, v in enumerate(self.controls):
             values = np.linspace(v.lower, v.upper, 9) if v.lower is not None and v.upper is not None else \

@@ -45,7 +45,7 @@ def terminal_scale(program: Transcription) -> float:
     alone fails a cost that is zero at the guess, such as COPS' catalyst mixing, :math:`-1 + x_1 + x_2`: scaled by
     1e-6, the epigraph variable moved 1e-3 per iteration at the largest trust radius.)"""
     p = program.problem
-    final = np.array([v.final if v.final is not None else (v.initial or 0.0) for v in p.states])
+    final = p.straight_line()[1]
     tf = p.tf_guess if program.free_time else p.tf
     state, time = p.state_vector(), p.time
     reach = ca.Function("reach", [state, time], [ca.jacobian(p.terminal, state), ca.jacobian(p.terminal, time)])

@@ -347,10 +347,7 @@ class Transcription:
         controls at their guess (else the middle of finite bounds, else 0), the final time at its guess."""
         p, N = self.problem, self.N
         s = np.linspace(0.0, 1.0, N + 1)[:, None]
-        start = np.array([v.initial if v.initial is not None else v.final if v.final is not None else (v.guess or 0.0)
-                          for v in p.states])
-        end = np.array([v.final if v.final is not None else start[i] for i, v in enumerate(p.states)])
-        control = np.array([_control_guess(v) for v in p.controls])
+        start, end, control = p.straight_line()
         values = np.tile(control, (self.control_values_per_axis(), 1))
         return self.assemble(start + s * (end - start), values, p.tf_guess if self.free_time else p.tf)
 
@@ -525,11 +522,3 @@ def cone_scales(W: sp.csr_matrix, variable_scale: np.ndarray, sizes: tuple[int, 
     ends = np.cumsum(sizes)
     out = np.array([float(np.max(reach[end - size: end], initial=0.0)) for end, size in zip(ends, sizes, strict=True)])
     return np.where(out > 0, out, 1.0)
-
-
-def _control_guess(v) -> float:
-    if v.guess is not None:
-        return v.guess
-    if v.lower is not None and v.upper is not None:
-        return 0.5 * (v.lower + v.upper)
-    return 0.0
