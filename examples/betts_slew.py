@@ -22,7 +22,6 @@ SOURCE = "Betts, Practical Methods for Optimal Control, 2nd ed. (2010), p. 299"
 FIGURE = "final time tf [s]"
 
 
-
 def build(intervals: int = 100) -> Problem:
     p = Problem("betts-asymmetric-slew")
     final_q = (math.sin(ANGLE / 2), 0.0, 0.0, math.cos(ANGLE / 2))

@@ -14,7 +14,6 @@ SOURCE = "Bernoulli 1696: the cycloid through (2, -2) m, g = 9.81 m/s^2"
 FIGURE = "final time tf [s]"
 
 
-
 def build(intervals: int = 30) -> Problem:
     p = Problem("brachistochrone")
     x = p.state("x", initial=0.0, final=2.0, unit="m")

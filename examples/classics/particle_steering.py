@@ -24,7 +24,6 @@ SOURCE = "COPS 3.0 (Dolan, More, Munson 2004), particle steering"
 FIGURE = "final time tf [s]"
 
 
-
 def build(intervals: int = 50) -> Problem:
     p = Problem("particle-steering")
     y1, y2 = p.state("y1", initial=0.0), p.state("y2", initial=0.0, final=5.0)

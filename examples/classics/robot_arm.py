@@ -26,7 +26,6 @@ SOURCE = "Dolan, More & Munson, COPS 3.0, ANL/MCS-TM-273 (2004), robot arm"
 FIGURE = "minimum final time t_f"
 
 
-
 def build(intervals: int = 40) -> Problem:
     p = Problem("cops-robot-arm")
     rho = p.state("rho", bounds=(0.0, L), initial=4.5, final=4.5)
