@@ -263,6 +263,9 @@ def test_convexguid_solve_runs_a_problem_module(tmp_path, capsys):
 @pytest.mark.parametrize(("module", "overrides", "message"), [
     ("brachistochrone.py", ["g=3"], r"--set 'g=3': not a parameter of build\(\); its parameters: intervals"),
     ("missing.py", [], r"missing.py: file not found"),
+    # a size that would eat the machine's memory is refused before anything is transcribed
+    ("brachistochrone.py", ["intervals=100000000"],
+     r"brachistochrone.py: brachistochrone: transcription.intervals: problem too large: .* TiB .* \(got 100000000\)"),
 ])
 def test_a_bad_problem_module_is_exit_2_with_one_line(module, overrides, message, capsys):
     from convexguid.cli import main
@@ -271,6 +274,21 @@ def test_a_bad_problem_module_is_exit_2_with_one_line(module, overrides, message
     assert main(args) == 2
     err = capsys.readouterr().err
     assert re.search(message, err) and err.count("\n") == 1
+
+
+def test_the_size_estimate_bounds_what_a_transcription_takes_and_admits_the_examples():
+    """The estimate is an upper bound of the memory measured for ocp/size.py's docstring, and no example's
+    default grid is near the limit."""
+    from convexguid.ocp.size import estimate_size
+    from convexguid.sizes import DEFAULT_MEMORY_LIMIT_BYTES, MIB, PROCESS_BYTES
+
+    shuttle = _example("classics/shuttle_reentry").build()
+    for intervals, method, measured_mib in ((200, "hermite-simpson", 48), (800, "hermite-simpson", 191),
+                                            (200, "zoh", 319)):
+        shuttle.transcription(intervals, method)
+        assert estimate_size(shuttle).memory_bytes - PROCESS_BYTES > measured_mib * MIB
+    for name in ("brachistochrone", "betts_slew", "cw_docking", "powered_descent", "classics/goddard_rocket"):
+        assert estimate_size(_example(name).build()).memory_bytes < 0.5 * DEFAULT_MEMORY_LIMIT_BYTES
 
 
 def test_a_module_whose_build_returns_something_else_is_refused(tmp_path, capsys):

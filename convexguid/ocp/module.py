@@ -48,7 +48,10 @@ def load_module_problem(path: str | Path, overrides: Sequence[str] = ()) -> Prob
         raise SpecError(f"{path}: build() raised {type(exc).__name__}: {exc}") from None
     if not isinstance(problem, Problem):
         raise SpecError(f"{path}: build() returned {type(problem).__name__}; it must return a convexguid.ocp.Problem")
-    problem.check()
+    try:
+        problem.check()
+    except SpecError as exc:
+        raise SpecError(f"{path}: {exc}") from None
     return problem
 
 

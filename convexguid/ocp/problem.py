@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from convexguid.errors import SpecError
+from convexguid.ocp.size import check_problem_size
 
 TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh", "chebyshev")
 """The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
@@ -398,6 +399,7 @@ class Problem:
             if unknown:
                 raise SpecError(f"{self.name}: {label}: uses {', '.join(unknown)}, which is not a state or control "
                                 "of this problem")
+        check_problem_size(self)
 
     def straight_line(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The straight-line guess: each state's first and last value (its initial and final ones, the other given

@@ -1,0 +1,56 @@
+"""The size limit of a :class:`~convexguid.ocp.problem.Problem`: its memory estimated from the statement before
+anything is transcribed, and a one-line refusal above the limit (:func:`convexguid.sizes.check_size`, as the YAML
+families do).
+
+Most of a transcription's memory is CasADi's symbolic graph: each interval evaluates the dynamics a few times
+(Hermite-Simpson: at the nodes and the midpoint; a hold: four Runge-Kutta stages per substep), and every
+evaluation copies the rate's instructions, then its Jacobian and the Lagrangian's Hessian copy them again.
+Measured on this machine (x86_64, CasADi 3.8): Betts' shuttle reentry (97 instructions, 6 states, 2 controls)
+takes 48 MB on 200 Hermite-Simpson intervals, 191 MB on 800, and 319 MB on 200 zero-order-hold intervals of 4
+substeps; the brachistochrone (13 instructions) 62 MB on 3000 Hermite-Simpson intervals. :data:`BYTES_PER_COPY`
+bounds all four from above. The mapped Chebyshev grid couples every node with every other in each defect row.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import casadi as ca
+
+from convexguid.sizes import DEFAULT_MEMORY_LIMIT_BYTES, PROCESS_BYTES, SizeEstimate, check_size
+
+if TYPE_CHECKING:
+    from convexguid.ocp.problem import Problem
+
+BYTES_PER_COPY = 1500.0
+"""Memory per copied instruction of the dynamics in one interval (graph, Jacobian and Hessian together)."""
+
+BYTES_PER_SPECTRAL_TERM = 300.0
+"""Memory per term of the Chebyshev differentiation in the defect rows ((nodes)^2 x states of them)."""
+
+DENSE_END_GAME_VARIABLES = 3000
+"""Up to this many variables the SCP's end game holds a few dense n x n matrices
+(:data:`convexguid.scp.lagrangian.MAX_DENSE_SIZE`)."""
+
+
+def estimate_size(problem: Problem) -> SizeEstimate:
+    """The peak memory of solving ``problem`` as stated, from its size and its dynamics' instruction count."""
+    nx, nu, N = len(problem.states), len(problem.controls), problem.intervals
+    rate = ca.Function("rate", [problem.state_vector(), problem.control_vector(), problem.time],
+                       [problem.rate_vector()])
+    instructions = rate.n_instructions() + nx + nu
+    copies = {"hermite-simpson": 3, "chebyshev": 1}.get(problem.method, 4 * problem.substeps)
+    graph = BYTES_PER_COPY * instructions * copies * (N + 1)
+    if problem.method == "chebyshev":
+        graph += BYTES_PER_SPECTRAL_TERM * (N + 1) ** 2 * nx
+    variables = (N + 1) * (nx + 2 * nu) + 1
+    dense = 4 * 8.0 * variables**2 if variables <= DENSE_END_GAME_VARIABLES else 0.0
+    return SizeEstimate(PROCESS_BYTES + graph + dense, "transcription.intervals", N,
+                        f"{N} {problem.method} intervals x {copies} copies of the dynamics' {instructions} "
+                        "instructions",
+                        "give fewer intervals (problem.transcription(intervals), or --set for a build() parameter)")
+
+
+def check_problem_size(problem: Problem, limit_bytes: float = DEFAULT_MEMORY_LIMIT_BYTES) -> None:
+    """Refuse ``problem`` with one line if its estimate is above ``limit_bytes``."""
+    check_size(problem.name, "ocp", estimate_size(problem), limit_bytes)
