@@ -8,7 +8,7 @@ tan(20 deg) (-x), written squared), entered at least 20 m below the target at ha
 at most 180 s. OpenSCvx's file minimizes nothing (its cost is zero: any feasible plan); this one minimizes fuel,
 the integral of |a_x| + |a_y| + |a_z|, with the acceleration linear between nodes (a first-order hold: the
 Clohessy-Wiltshire flow across each interval is exact, so the dense re-propagation lands where the plan does).
-validation/BENCHMARKS_ocp.md sets the two side by side (examples/openscvx_side_by_side.py).
+validation/BENCHMARKS_ocp.md sets the two side by side (python -m convexguid.benches.openscvx).
 Run: python examples/proxops_openscvx.py
 """
 

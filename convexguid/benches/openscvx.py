@@ -5,7 +5,7 @@ validation/BENCHMARKS_ocp.md.
 OpenSCvx (JAX) is not a convexguid dependency: give the Python that has it, e.g. a virtual environment made with
 ``python -m venv --system-site-packages venv && venv/bin/pip install openscvx``:
 
-    python examples/openscvx_side_by_side.py --openscvx-python venv/bin/python
+    python -m convexguid.benches.openscvx --openscvx-python venv/bin/python
 """
 
 from __future__ import annotations
@@ -23,7 +23,8 @@ from scipy.integrate import trapezoid
 from convexguid.bench_common import bench_document, markdown_grid
 from convexguid.outputs import write_text_atomic
 
-HERE = Path(__file__).resolve().parent
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+"""The checkout's examples folder, whose problem modules this benchmark solves."""
 
 # OpenSCvx's statement of the problem, in its API (OpenSCvx 0.5.2, examples/spacecraft/proxops_cw.py's numbers:
 # 5 nodes, ZOH, the cone over the last two intervals, the entrance at the middle node; no cost term)
@@ -73,7 +74,7 @@ def judge(t: np.ndarray, x: np.ndarray, u: np.ndarray) -> dict:
 def run_convexguid(intervals: int) -> dict:
     """The example on ``intervals`` first-order-hold intervals, timed from the problem's statement to the verified
     plan (imports before the clock, as OpenSCvx's set-up is timed after its import), then the same as a command."""
-    sys.path.insert(0, str(HERE))
+    sys.path.insert(0, str(EXAMPLES))
     import proxops_openscvx
 
     import convexguid.ocp.solve  # noqa: F401 - the engine and SciPy load before the clock starts
@@ -86,7 +87,7 @@ def run_convexguid(intervals: int) -> dict:
     x = np.column_stack([dense[k] for k in ("x", "y", "z", "vx", "vy", "vz")])
     u = np.column_stack([dense[k] for k in ("ax", "ay", "az")])
     started = time.perf_counter()
-    process = subprocess.run(["convexguid", "solve", str(HERE / "proxops_openscvx.py"), "--quiet",
+    process = subprocess.run(["convexguid", "solve", str(EXAMPLES / "proxops_openscvx.py"), "--quiet",
                               "--set", f"intervals={intervals}"], capture_output=True, text=True, check=False)
     process_s = time.perf_counter() - started
     return {"intervals": intervals, "wall_s": wall, "process_s": process_s, "process_exit": process.returncode,
@@ -144,11 +145,11 @@ def document(ours: list[dict], theirs: dict, command: str) -> str:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--openscvx-python", required=True, help="a Python interpreter that has openscvx")
-    parser.add_argument("--output", type=Path, default=HERE.parent / "validation" / "BENCHMARKS_ocp.md")
+    parser.add_argument("--output", type=Path, default=EXAMPLES.parent / "validation" / "BENCHMARKS_ocp.md")
     args = parser.parse_args()
     theirs = run_openscvx(args.openscvx_python)
     ours = [run_convexguid(intervals) for intervals in (20, 40)]
-    text = document(ours, theirs, f"python examples/openscvx_side_by_side.py --openscvx-python {args.openscvx_python}")
+    text = document(ours, theirs, f"python -m convexguid.benches.openscvx --openscvx-python {args.openscvx_python}")
     write_text_atomic(args.output, text)
     print(text)
     return 0

@@ -2,7 +2,7 @@
 Hessian, through CasADi) on the same transcribed NLP from the same start, timed in one run; writes
 validation/BENCHMARKS_ocp_examples.md.
 
-Run: python examples/ocp_vs_ipopt.py [--output PATH]
+Run: python -m convexguid.benches.ocp_examples [--output PATH]
 """
 
 from __future__ import annotations
@@ -16,7 +16,8 @@ from pathlib import Path
 from convexguid.bench_common import bench_document, markdown_grid
 from convexguid.outputs import write_text_atomic
 
-HERE = Path(__file__).resolve().parent
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+"""The checkout's examples folder, whose problem modules this benchmark solves."""
 
 CASES = [
     ("brachistochrone", "brachistochrone", "build", "minimum time [s]"),
@@ -30,7 +31,7 @@ CASES = [
 
 
 def _module(name: str):
-    spec = importlib.util.spec_from_file_location(name, HERE / f"{name}.py")
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -55,7 +56,7 @@ def run_case(label: str, module_name: str, builder: str, objective: str) -> list
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--output", type=Path, default=HERE.parent / "validation" / "BENCHMARKS_ocp_examples.md")
+    parser.add_argument("--output", type=Path, default=EXAMPLES.parent / "validation" / "BENCHMARKS_ocp_examples.md")
     args = parser.parse_args()
     import convexguid.ocp.solve  # noqa: F401 - the engine, SciPy and CasADi load before any clock starts
 
@@ -78,7 +79,7 @@ def main() -> int:
              "IPOPT's starts are the examples' own (straight lines, control guesses); on Betts' slew it stops at an "
              "acceptable level far above the published 28.6304 s from there, where the SCP reaches it."]
     text = bench_document("convexguid.ocp examples against IPOPT on the same NLP", ["numpy", "scipy", "casadi",
-                          "clarabel"], "python examples/ocp_vs_ipopt.py", caption, table, notes)
+                          "clarabel"], "python -m convexguid.benches.ocp_examples", caption, table, notes)
     write_text_atomic(args.output, text)
     print(text)
     return 0
