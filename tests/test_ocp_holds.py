@@ -22,9 +22,11 @@ from scipy.linalg import expm
 
 from convexguid.errors import SpecError
 from convexguid.ocp import Problem
+from convexguid.ocp.chebyshev import MAP_EPSILON
 from convexguid.ocp.hold import FirstOrderHoldProgram, ZeroOrderHoldProgram
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
+from convexguid.transcription.mapped_chebyshev import MappedChebyshev
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -179,6 +181,11 @@ def test_the_mapped_chebyshev_grid_is_spectrally_accurate_on_the_brachistochrone
     solution = problem.solve()
     assert solution.ok and solution.kkt["met"], solution.message
     assert solution.figures.final_time_s == pytest.approx(cycloid_time(2.0, 2.0, brachistochrone.G), rel=1e-8)
+    # the nodes' times are the grid's (clustered at the ends, not equally spaced), and the size counts its rows:
+    # collocation at all order + 1 nodes (3 states), the fixed initial state and final position (5 values)
+    grid = MappedChebyshev(order, MAP_EPSILON).nodes
+    assert solution.nodes.t == pytest.approx(0.5 * (grid + 1.0) * solution.figures.final_time_s, rel=1e-12)
+    assert solution.size.num_equality_constraints == 3 * (order + 1) + 5
 
 
 def test_a_point_constraint_off_the_chebyshev_nodes_is_refused():

@@ -56,6 +56,15 @@ def transcribe(problem: Problem) -> Transcription:
     return TRANSCRIPTIONS[problem.method](problem)
 
 
+def program_size(program: Transcription, z: np.ndarray) -> ProgramSize:
+    """The NLP's dimensions as transcribed: its variables, its equality rows (the defects as the transcription
+    collocates them, path and boundary equalities, the fixed boundary values and affine boundary rows) and its path
+    constraint rows."""
+    equalities = sum(block.values.size for block in program.evaluate(z, jacobians=False).equalities)
+    return ProgramSize(program.num_variables, equalities + program.linear_constraints().A.shape[0],
+                       program.num_path)
+
+
 def solve_problem(problem: Problem, max_iterations: int = 300, verification_points: int = 20,
                   log: Log | None = None) -> Solution:
     """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise (``log`` gets one
@@ -73,10 +82,8 @@ def solve_problem(problem: Problem, max_iterations: int = 300, verification_poin
         outcome = solve_verified(program, settings, DenseChecker(verification_points), log)
     final = outcome.program
     z = final.unwrapped(outcome.x)
-    size = ProgramSize(final.num_variables, final.N * final.nx + sum(v.initial is not None for v in problem.states)
-                       + sum(v.final is not None for v in problem.states), final.num_path)
     tf = final.final_time(z)
-    nodes_t = [tf * k / final.N for k in range(final.N + 1)]
+    nodes_t = tf * final.node_shares()
     columns = {v.name: final.states(z)[:, i] for i, v in enumerate(problem.states)}
     columns |= {v.name: final.node_controls(z)[:, j] for j, v in enumerate(problem.controls)}
     dense = None
@@ -84,8 +91,8 @@ def solve_problem(problem: Problem, max_iterations: int = 300, verification_poin
         track = outcome.check.track
         dense = Trajectory(track.t, {v.name: track.x[:, i] for i, v in enumerate(problem.states)}
                            | {v.name: track.u[:, j] for j, v in enumerate(problem.controls)})
-    return planned_solution(_Statement(problem.name), outcome, started, size,
-                            nodes=Trajectory(np.array(nodes_t), columns), dense=dense,
+    return planned_solution(_Statement(problem.name), outcome, started, program_size(final, outcome.x),
+                            nodes=Trajectory(nodes_t, columns), dense=dense,
                             figures=OcpFigures(final_time_s=tf, states=tuple(v.name for v in problem.states),
                                                controls=tuple(v.name for v in problem.controls),
                                                parameters={name: float(columns[name][0])
