@@ -24,7 +24,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from convexguid.errors import SpecError
+from convexguid.ocp.mesh import require_point_constraints_on_nodes
 from convexguid.ocp.transcription import Symbols, Transcription
 from convexguid.transcription.mapped_chebyshev import MappedChebyshev
 
@@ -37,12 +37,8 @@ class MappedChebyshevProgram(Transcription):
 
     def __init__(self, problem, margins=None, intervals=None) -> None:
         self.grid = MappedChebyshev(intervals if intervals is not None else problem.intervals, MAP_EPSILON)
-        shares = self.node_shares()
-        for c in problem.constraints:
-            if c.at is not None and np.min(np.abs(shares - c.at)) > 1e-9:
-                raise SpecError(f"{problem.name}: point_constraint {c.name!r}: at = {c.at:g} of the final time is not "
-                                f"a node of the {self.grid.n}-interval mapped Chebyshev grid (nodes at shares "
-                                f"{', '.join(f'{v:.4g}' for v in shares)})")
+        require_point_constraints_on_nodes(problem, self.node_shares(),
+                                           f"{self.grid.n}-interval mapped Chebyshev grid")
         super().__init__(problem, margins, intervals)
 
     def node_shares(self) -> np.ndarray:

@@ -6,7 +6,11 @@ node; a zero- or first-order hold), held within the control's bounds (what the a
 initial state; on a grid of ``points`` samples per interval the path constraints and the state bounds are
 evaluated, and at the end the propagated state is compared with the stated final values (scaled by each state's
 scale). A broken path constraint or state bound is repaired by tightening it on the intervals where it broke
-(:func:`~convexguid.scp.check_repair.grown_margin`) and re-solving warm.
+(:func:`~convexguid.scp.check_repair.grown_margin`) and re-solving warm. An error the grid makes (a final-state
+error, a violation the tightening stopped reducing, a broken path equality) is repaired by refining it: a
+Hermite-Simpson program splits the intervals whose local error exceeds its tolerance, where the dense check broke a
+constraint and where a control chatters (:mod:`convexguid.ocp.mesh`, Betts 2010, Sec. 4.7); the others double
+every interval.
 """
 
 from __future__ import annotations
@@ -17,6 +21,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from convexguid.ocp.boundary import boundary_errors
+from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
+from convexguid.ocp.mesh import JUMP_SHARE, control_jumps, held_control, plan_refinement, refined_program
 from convexguid.ocp.transcription import Margins, Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
@@ -31,7 +37,7 @@ MARGIN_FLOOR = 1e-6
 """Smallest tightening a repair adds to the path constraints."""
 
 MAX_INTERVALS = 400
-"""A repair doubles the intervals up to this many (the transcription's error, not the constraints, is the cause)."""
+"""A refinement makes at most this many intervals (the transcription's error, not the constraints, is the cause)."""
 
 
 @dataclass(frozen=True)
@@ -43,25 +49,15 @@ class DenseTrack:
     u: np.ndarray
 
 
-JUMP_SHARE = 0.5
-"""A control whose value moves by more than this share of its range between neighbouring values is named."""
-
-
 def jumping_controls(program: Transcription, z: np.ndarray) -> tuple[str, ...]:
-    """Remarks on the controls that move by most of their range (:data:`JUMP_SHARE`) between two neighbouring
-    values in time: a transcription's optimum that chatters between node and midpoint values (COPS' hang glider on a
-    coarse Hermite-Simpson grid) satisfies the collocation equations but not the dynamics flown between them."""
-    values = program.control_values(program.unwrapped(z))[np.argsort(program.control_value_shares(), kind="stable")]
-    low, high = program.problem.bounds_array(program.problem.controls)
-    spread = np.where(np.isfinite(high - low), high - low, np.ptp(values, axis=0))
-    remarks = []
-    for j, v in enumerate(program.problem.controls):
-        jumps = np.abs(np.diff(values[:, j]))
-        count = int(np.sum(jumps > JUMP_SHARE * spread[j])) if spread[j] > 0 else 0
-        if count:
-            remarks.append(f"control {v.name} moves by more than {JUMP_SHARE:.0%} of its range between neighbouring "
-                           f"values {count} times (a plan that chatters between collocation points)")
-    return tuple(remarks)
+    """Remarks on the controls that move by most of their range (:data:`~convexguid.ocp.mesh.JUMP_SHARE`) between
+    two neighbouring values in time: a transcription's optimum that chatters between node and midpoint values (COPS'
+    hang glider on a coarse Hermite-Simpson grid) satisfies the collocation equations but not the dynamics flown
+    between them."""
+    jumps = control_jumps(program, z)[1]
+    return tuple(f"control {v.name} moves by more than {JUMP_SHARE:.0%} of its range between neighbouring values "
+                 f"{int(jumps[:, j].sum())} times (a plan that chatters between collocation points)"
+                 for j, v in enumerate(program.problem.controls) if jumps[:, j].any())
 
 
 class DenseChecker:
@@ -71,12 +67,8 @@ class DenseChecker:
         self.points = points
 
     def control(self, program: Transcription, z: np.ndarray):
-        """The planned control as a function of time, as the transcription holds it between nodes, within its
-        bounds (the actuator delivers no more: where Hermite-Simpson's quadratic overshoots a bound between nodes,
-        as it does next to a switch of a bang-bang control, the flight gets the bound and the check judges that)."""
-        planned = program.control_function(program.unwrapped(z))
-        low, high = program.problem.bounds_array(program.problem.controls)
-        return lambda t: np.clip(planned(t), low, high)
+        """The planned control as flown (:func:`~convexguid.ocp.mesh.held_control`: within its bounds)."""
+        return held_control(program, z)
 
     def propagate(self, program: Transcription, z: np.ndarray) -> DenseTrack:
         rate = program.rate
@@ -119,14 +111,14 @@ class DenseChecker:
     def repair(self, program: Transcription, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
         """Tighten each path constraint and state bound broken between nodes on the intervals where it broke: at
         their two nodes and midpoint, by the worst excess there (grown each round, never at a node whose values
-        are all fixed: there nothing can move). None when nothing is broken, or when the last tightening left the
-        worst violation above 90% of what it was (a constraint pinned at a fixed boundary value: the plan is
-        ``unverified`` at once instead of after the whole repair budget). A final-state error is the
-        transcription's, not repaired here: more intervals (``transcription(intervals=...)``) reduce it."""
+        are all fixed: there nothing can move). With nothing broken between nodes (a final-state error), when the
+        last tightening left the worst violation above 90% of what it was, or for a broken path equality, the grid
+        is refined instead (:meth:`_refine`; None past :data:`MAX_INTERVALS`: the plan is ``unverified`` at once
+        instead of after the whole repair budget)."""
         worst_now = check.verification.max_violation
         if worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation:
             # nothing broken between nodes, or the last tightening did not reduce it: the grid is too coarse
-            return self._refine(program, z)
+            return self._refine(program, z, check)
         p, track, N = program.problem, check.track, program.N
         node_times = program.final_time(z) * program.node_shares()
         interval = np.clip(np.searchsorted(node_times, track.t, side="right") - 1, 0, N - 1)
@@ -158,19 +150,37 @@ class DenseChecker:
         old = program.margins
         if all(np.array_equal(a, b) for a, b in ((path, old.path), (bounds, old.bounds), (cone, old.cone))):
             # nothing to tighten: a broken path equality asks for a finer grid; anything else stays broken
-            return self._refine(program, z) if broken_equality else None
+            return self._refine(program, z, check) if broken_equality else None
         largest = max(path.max(initial=0.0), bounds.max(initial=0.0), cone.max(initial=0.0))
         return Repair(program.with_margins(Margins(path, bounds, worst_now, cone)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
                       f"margin {largest:.3g})")
 
-    @staticmethod
-    def _refine(program: Transcription, z: np.ndarray) -> Repair | None:
-        """Twice the intervals (up to :data:`MAX_INTERVALS`), the plan carried over; None past the limit."""
+    def _refine(self, program: Transcription, z: np.ndarray, check: Check) -> Repair | None:
+        """A finer grid with the plan carried over, at most :data:`MAX_INTERVALS` intervals; None when none fits.
+        Hermite-Simpson splits where the error is (:func:`~convexguid.ocp.mesh.plan_refinement`: the local error,
+        the constraints the dense check broke, a chattering control); the other transcriptions double every
+        interval."""
+        if isinstance(program, HermiteSimpsonProgram):
+            plan = plan_refinement(program, z, self._broken_intervals(program, check), MAX_INTERVALS)
+            if plan is None:
+                return None
+            fine, start = refined_program(program, z, plan)
+            return Repair(fine, start, plan.description)
         if 2 * program.N > MAX_INTERVALS:
             return None
         fine, start = program.refined(z)
         return Repair(fine, start, f"intervals doubled to {fine.N} (the dense check's errors are the grid's)")
+
+    def _broken_intervals(self, program: Transcription, check: Check) -> np.ndarray:
+        """Whether the dense check saw a path constraint or a state bound broken on each interval, shape ``(N,)``."""
+        track = check.track
+        interval = np.clip(np.searchsorted(track.t[-1] * program.node_shares(), track.t, side="right") - 1, 0,
+                           program.N - 1)
+        broken = np.zeros(program.N, dtype=bool)
+        for excess in self._excess(program, track).values():
+            broken[interval[excess > PATH_TOLERANCE]] = True
+        return broken
 
     @staticmethod
     def _excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:

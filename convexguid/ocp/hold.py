@@ -28,7 +28,8 @@ from convexguid.ocp.transcription import Symbols, Transcription
 
 
 class HoldProgram(Transcription):
-    """A hold of ``order`` 0 or 1 (subclasses below), the flow integrated by ``problem.substeps`` RK4 steps."""
+    """A hold of ``order`` 0 or 1 (subclasses below), the flow integrated by ``problem.substeps`` RK4 steps, on equal
+    intervals (a hold takes no grid of its own: its steps, instants and refinement are the equal ones)."""
 
     order = 0
 
@@ -82,7 +83,7 @@ class HoldProgram(Transcription):
 
     def control_value_shares(self) -> np.ndarray:
         # a zero-order hold's value stands for its interval (its middle), a first-order hold's for its node
-        nodes = np.linspace(0.0, 1.0, self.N + 1)
+        nodes = self.node_shares()
         return nodes if self.order == 1 else 0.5 * (nodes[:-1] + nodes[1:])
 
     def node_controls(self, z: np.ndarray) -> np.ndarray:

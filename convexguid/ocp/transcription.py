@@ -13,8 +13,9 @@ the control values make the control between nodes and writes the dynamics defect
 
 Boundary values and bounds are the hard linear constraints :math:`Az = b`, :math:`Gz \\le h`; path constraints hold
 where the transcription imposes them and cone constraints at the nodes (kept exact: second-order cones on affine
-maps of ``z``), each less the margin a dense-check repair may have added there (:class:`Margins`). With step
-:math:`h = t_f/N` and the transcription's quadrature weights :math:`w_j` per unit step, minimum time is the linear
+maps of ``z``), each less the margin a dense-check repair may have added there (:class:`Margins`). With the mean
+step :math:`h = t_f/N` and the transcription's quadrature weights :math:`w_j` per mean step (an uneven grid's in its
+intervals' lengths, :mod:`convexguid.ocp.hermite_simpson`), minimum time is the linear
 cost :math:`t_f`, minimum energy :math:`h \\sum_j w_j v_j^2` (weighted residuals :math:`r = v`), minimum fuel
 :math:`h \\sum_j w_j s_j` with :math:`-s \\le v \\le s` linear: a linear cost when the final time is fixed, else
 :math:`\\min J` subject to :math:`h \\sum_j w_j s_j - J \\le 0` (an epigraph the engine linearizes like any
@@ -82,6 +83,7 @@ class Symbols:
     """Control values, ``nu x C``."""
     tf: ca.SX
     h: ca.SX
+    """The mean step ``t_f / N`` (every interval's on equal intervals)."""
 
 
 class Transcription:
@@ -120,7 +122,7 @@ class Transcription:
         raise NotImplementedError
 
     def per_step_weights(self) -> np.ndarray:
-        """Quadrature weights per unit step of each control value (per axis, in the order of ``z``)."""
+        """Quadrature weights per mean step ``t_f / N`` of each control value (per axis, in the order of ``z``)."""
         raise NotImplementedError
 
     def intervals(self, s: Symbols, imposed) -> list[ca.SX]:
@@ -136,7 +138,8 @@ class Transcription:
         raise NotImplementedError
 
     def refined(self, z: np.ndarray) -> tuple[Transcription, np.ndarray]:
-        """The same problem on twice the intervals, and ``z`` carried onto it (margins start afresh)."""
+        """The same problem on a finer grid (twice the intervals unless a subclass splits fewer), and ``z`` carried
+        onto it (margins start afresh)."""
         raise NotImplementedError
 
     def values_from_nodes(self, controls: np.ndarray) -> np.ndarray:

@@ -1,0 +1,263 @@
+"""Hermite-Simpson on an uneven grid and error-driven mesh refinement (convexguid.ocp.mesh, Betts 2010, Sec. 4.7).
+
+* Equal intervals: the defects are the equal-step formula's, written out here in NumPy (to 1e-15), and a grid of
+  equal shares is the default program.
+* An uneven grid: the collocation is exact on a cubic state with a time-dependent rate, Simpson's weights integrate
+  a quadratic exactly, the control's interpolant follows the nodes, and the defects of the exact harmonic
+  oscillator fall at the fifth power of the step when every interval is halved.
+* Refinement splits only the intervals with a large local error (a sharp push near the end of a rest-to-rest
+  transfer), the carried plan solves the finer defects within the error it had, the cap is honoured, the order
+  reduction is Betts' estimate, a chattering control's intervals are marked, and the solve ends verified on fewer
+  intervals than doubling takes.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from convexguid.errors import SpecError
+from convexguid.ocp import Problem
+from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
+from convexguid.ocp.mesh import (
+    LOCAL_ERROR_TOLERANCE,
+    chattering_intervals,
+    interval_errors,
+    order_reduction,
+    pieces_wanted,
+    plan_refinement,
+    refined_program,
+)
+from convexguid.scp.engine import SCPAlgorithm
+from convexguid.scp.problem import SCPSettings
+
+GRADED = np.array([0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
+"""Node shares of uneven intervals (the shortest an eighth of the longest)."""
+
+
+def forced_oscillator(intervals: int = 9, control: str = "quadratic", duration: float = 3.0) -> Problem:
+    """x' = v, v' = -x + u, y' = t^2 + u: linear, with a rate that depends on time."""
+    p = Problem("forced-oscillator")
+    x = p.state("x", initial=1.0)
+    v = p.state("v", initial=0.0)
+    y = p.state("y", initial=0.0)
+    u = p.control("u", bounds=(-5.0, 5.0))
+    p.dynamics({x: v, v: -x + u, y: p.time**2 + u})
+    p.final_time(fixed=duration)
+    p.minimize_energy()
+    p.transcription(intervals, control=control)
+    return p
+
+
+def equal_step_defects(program: HermiteSimpsonProgram, z: np.ndarray, shares: np.ndarray) -> np.ndarray:
+    """Hermite-Simpson's defects (Betts 2010, eqs. 4.103-4.104) written out on the node ``shares``, scaled."""
+    X, U, M = program.states(z), program.node_controls(z), program.midpoint_controls(z)
+    times = program.final_time(z) * shares
+
+    def f(x, u, t):
+        return np.asarray(program.rate(x, u, t)).ravel()
+
+    out = []
+    for k in range(program.N):
+        h = times[k + 1] - times[k]
+        fk, fk1 = f(X[k], U[k], times[k]), f(X[k + 1], U[k + 1], times[k + 1])
+        xm = 0.5 * (X[k] + X[k + 1]) + h / 8 * (fk - fk1)
+        fm = f(xm, M[k], times[k] + h / 2)
+        out.append((X[k + 1] - X[k] - h / 6 * (fk + 4 * fm + fk1)) / program.state_scales)
+    return np.concatenate(out)
+
+
+def defects(program, z) -> np.ndarray:
+    return program.evaluate(z, jacobians=False).equalities[0].values
+
+
+def test_equal_intervals_give_the_equal_step_defects_and_a_grid_of_equal_shares_is_the_default():
+    problem = forced_oscillator()
+    program = HermiteSimpsonProgram(problem)
+    z = program.initial_guess() + np.random.default_rng(0).normal(0.0, 0.3, program.num_variables)
+    reference = equal_step_defects(program, z, np.linspace(0.0, 1.0, program.N + 1))
+    assert np.max(np.abs(defects(program, z) - reference)) <= 1e-15 * max(1.0, np.abs(reference).max())
+    same = HermiteSimpsonProgram(problem, grid=np.linspace(0.0, 1.0, program.N + 1))
+    assert same.uneven_shares is None and np.array_equal(defects(same, z), defects(program, z))
+    # the uneven build on shares a rounding away from equal: the same defects to that rounding
+    nudged = np.linspace(0.0, 1.0, program.N + 1) + np.r_[0.0, 1e-12, np.zeros(program.N - 1)]
+    uneven = HermiteSimpsonProgram(problem, grid=nudged)
+    assert uneven.uneven_shares is not None
+    assert np.max(np.abs(defects(uneven, z) - defects(program, z))) <= 1e-9
+
+
+@pytest.mark.parametrize("control", ["quadratic", "linear"])
+def test_an_uneven_grid_is_exact_on_a_cubic_state_and_a_quadratic_integrand(control):
+    """With u = 1 + t (held exactly by either interpolant), y = t^3/3 + t + t^2/2 is cubic: Hermite-Simpson's
+    defects vanish on any grid, and Simpson's rule integrates u^2 exactly."""
+    program = HermiteSimpsonProgram(forced_oscillator(control=control), grid=GRADED)
+    tf = program.final_time(program.initial_guess())
+    times = tf * GRADED
+    z = program.initial_guess()
+    shares = program.control_value_shares()
+    z[program.control_start: program.slack_start] = 1.0 + tf * shares
+    states = program.states(z).copy()
+    states[:, 2] = times**3 / 3 + times + times**2 / 2
+    z[: program.control_start] = states.ravel()
+    assert np.abs(defects(program, z).reshape(program.N, 3)[:, 2]).max() <= 1e-13
+    energy = program.residual_weights() @ program.evaluate(z).residuals ** 2
+    assert energy == pytest.approx(((1 + tf) ** 3 - 1) / 3, rel=1e-13)
+    u = program.control_function(z)
+    probe = np.random.default_rng(1).uniform(0.0, tf, 50)
+    assert np.allclose([u(t)[0] for t in probe], 1.0 + probe, rtol=0, atol=1e-13)
+    if control == "quadratic":
+        assert np.allclose(shares[program.N + 1:], 0.5 * (GRADED[:-1] + GRADED[1:]))
+
+
+@pytest.mark.parametrize("control", ["quadratic", "linear"])
+@pytest.mark.parametrize("free_time", [False, True])
+def test_the_fuel_on_an_uneven_grid_is_the_integral(control, free_time):
+    """|u| = 1 + t: the fuel (a linear cost, or with a free final time the epigraph variable at its value) is
+    t_f + t_f^2 / 2 by Simpson's or the trapezoidal rule on the grid's own intervals."""
+    problem = forced_oscillator(control=control)
+    if free_time:
+        problem.final_time(bounds=(1.0, 5.0), guess=3.0)
+    problem.minimize_fuel()
+    program = HermiteSimpsonProgram(problem, grid=GRADED)
+    z = program.initial_guess()
+    tf = program.final_time(z)
+    z = program.assemble(program.states(z), (1.0 + tf * program.control_value_shares())[:, None], tf)
+    fuel = z[program.slack_start + program.num_slacks] if free_time else program.linear_cost() @ z
+    assert fuel == pytest.approx(tf + tf**2 / 2, rel=1e-13)
+    if free_time:
+        assert abs(program.evaluate(z).inequalities[-1].values[0]) <= 1e-13
+
+
+def test_an_uneven_grid_converges_at_the_fifth_power_of_the_step():
+    """The exact free oscillation x = cos t, v = -sin t on the graded grid and on it with every interval halved:
+    the local defect falls about 2^5 = 32-fold, and on every interval it is its own step to the fifth power times
+    about 1/750 (Simpson's and the midpoint interpolant's error constants; |x^(5)| <= 1)."""
+    problem = forced_oscillator()
+    worst = []
+    for grid in (GRADED, np.sort(np.concatenate([GRADED, 0.5 * (GRADED[:-1] + GRADED[1:])]))):
+        program = HermiteSimpsonProgram(problem, grid=grid)
+        times = 3.0 * grid
+        states = np.column_stack([np.cos(times), -np.sin(times), times**3 / 3])
+        z = program.assemble(states, np.zeros((program.control_values_per_axis(), 1)), 3.0)
+        local = np.abs(defects(program, z).reshape(program.N, 3)[:, :2]) * program.state_scales[:2]
+        per_step = local.max(axis=1) / np.diff(times) ** 5
+        assert np.all((per_step >= 5e-4) & (per_step <= 2.5e-3))
+        worst.append(local.max())
+    assert 20.0 <= worst[0] / worst[1] <= 45.0
+
+
+def bump(intervals: int = 10) -> Problem:
+    """Rest to rest over 1 m in 1 s at minimum energy, pushed hard for a few hundredths of a second near the end."""
+    p = Problem("bump")
+    x = p.state("x", initial=0.0, final=1.0)
+    v = p.state("v", initial=0.0, final=0.0)
+    u = p.control("u")
+    p.dynamics({x: v, v: u + 5.0 * ca.exp(-(((p.time - 0.9) / 0.02) ** 2))})
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(intervals)
+    return p
+
+
+@pytest.fixture(scope="module")
+def bump_plan():
+    program = HermiteSimpsonProgram(bump())
+    result = SCPAlgorithm(program, SCPSettings()).run(program.initial_guess())
+    assert result.status == "converged"
+    return program, result.x
+
+
+def test_refinement_splits_only_the_intervals_where_the_error_is(bump_plan):
+    program, z = bump_plan
+    errors = interval_errors(program, z)
+    assert errors[8:].min() > 1e-4 and errors[:8].max() < 1e-8  # the push is at 0.9 s, the grid's nodes 0.1 s apart
+    plan = plan_refinement(program, z, np.zeros(program.N, dtype=bool), max_intervals=400)
+    assert np.array_equal(plan.pieces > 1, errors > LOCAL_ERROR_TOLERANCE)
+    assert plan.description.startswith("2 of 10 intervals split (2 where the local error exceeded 1e-06")
+    assert plan.description.endswith(f": {int(plan.pieces.sum())} intervals")
+    fine, _ = refined_program(program, z, plan)
+    assert np.array_equal(fine.node_shares()[:9], program.node_shares()[:9])  # the quiet part kept as it was
+
+
+def test_the_carried_plan_solves_the_finer_defects_within_the_error_it_had(bump_plan):
+    program, z = bump_plan
+    plan = plan_refinement(program, z, np.zeros(program.N, dtype=bool), max_intervals=400)
+    fine, carried = refined_program(program, z, plan)
+    coarse = np.abs(defects(program, z)).reshape(program.N, -1).max(axis=1)
+    finer = np.abs(defects(fine, carried)).reshape(fine.N, -1).max(axis=1)
+    parent = np.repeat(np.arange(program.N), plan.pieces)
+    assert np.all(finer <= 1.1 * np.maximum(plan.errors, coarse)[parent] + 1e-12)
+    kept = plan.pieces[parent] == 1
+    assert np.allclose(finer[kept], coarse[parent[kept]], rtol=0, atol=1e-14)
+    # the same plan: the carried control is the planned one, the energy the same to the quadrature's error
+    energy = program.residual_weights() @ program.evaluate(z).residuals ** 2
+    assert fine.residual_weights() @ fine.evaluate(carried).residuals ** 2 == pytest.approx(energy, rel=1e-3)
+    assert fine.split_from is not None and np.array_equal(fine.split_from[1], plan.pieces[parent])
+
+
+def test_the_interval_cap_splits_the_worst_first_and_says_so(bump_plan):
+    program, z = bump_plan
+    plan = plan_refinement(program, z, np.zeros(program.N, dtype=bool), max_intervals=program.N + 1)
+    errors = interval_errors(program, z)
+    assert plan.pieces.sum() == program.N + 1 and plan.pieces[np.argmax(errors)] == 2
+    assert "1 more held back by the cap of 11" in plan.description
+    assert plan_refinement(program, z, np.zeros(program.N, dtype=bool), max_intervals=program.N) is None
+
+
+def test_the_order_reduction_is_betts_estimate_and_sets_the_pieces():
+    program = HermiteSimpsonProgram(bump(), grid=np.r_[0.0, 0.05, np.linspace(0.1, 1.0, 10)])
+    errors = np.full(program.N, 1e-5)
+    # split in two: an error 32 times smaller is the full order (r = 0), twice smaller is r = 4
+    program.split_from = (np.r_[32e-5, 32e-5, np.full(program.N - 2, 2e-5)], np.r_[2, 2, np.ones(program.N - 2)])
+    reduction = order_reduction(program, errors)
+    assert reduction[0] == 0 and reduction[1] == 0
+    assert np.all(reduction[2:] == 0)  # never split: the assumed reduction
+    program.split_from = (np.full(program.N, 2e-5), np.full(program.N, 2))
+    assert np.all(order_reduction(program, errors) == 4)
+    assert list(pieces_wanted(np.array([2e-6, 2e-5, 1e-3, 1e-3]), np.array([0, 0, 0, 4]), 1e-6)) == [2, 2, 4, 4]
+    assert list(pieces_wanted(np.array([3e-6]), np.array([4]), 1e-6)) == [3]
+
+
+def test_a_chattering_control_marks_its_intervals():
+    program = HermiteSimpsonProgram(forced_oscillator(intervals=10))
+    z = program.initial_guess()
+    assert not chattering_intervals(program, z).any()
+    values = np.full_like(program.control_values(z), -5.0)
+    values[program.N + 1 + 3] = 5.0  # interval 3's midpoint jumps across the range
+    values[6] = 5.0  # and node 6 (intervals 5 and 6)
+    z[program.control_start: program.slack_start] = values.ravel()
+    assert list(np.flatnonzero(chattering_intervals(program, z))) == [3, 5, 6]
+
+
+def test_a_point_constraint_off_the_uneven_grid_is_refused():
+    problem = forced_oscillator(intervals=10)
+    problem.point_constraint("halfway", problem.states[0].symbol - 2.0, at=0.5)
+    HermiteSimpsonProgram(problem, grid=GRADED)  # 0.5 is a node
+    with pytest.raises(SpecError, match="at = 0.5 of the final time is not a node"):
+        HermiteSimpsonProgram(problem, grid=np.r_[0.0, 0.3, 0.6, 1.0])
+
+
+def test_a_solve_refines_where_the_push_is_and_ends_verified():
+    solution = bump().solve()
+    assert solution.ok, solution.message
+    t = solution.nodes.t  # the nodes' times are the grid's
+    assert len(t) - 1 < 40  # doubling takes 10 -> 20 -> 40
+    assert np.array_equal(t[t < 0.75], np.linspace(0.0, 1.0, 11)[:8])  # the quiet part never split
+    assert 0.8 <= t[np.argmin(np.diff(t))] < 1.0
+    assert all("intervals split" in r.repair for r in solution.repair_rounds[1:])
+
+
+def test_doubling_keeps_the_equal_grid_and_the_midpoint_states():
+    """Without pieces every interval is halved: the equal-step program on 2N intervals, the new nodes at
+    Hermite-Simpson's midpoint states (the cubic the collocation holds)."""
+    program = HermiteSimpsonProgram(forced_oscillator(intervals=6))
+    z = program.initial_guess() + np.random.default_rng(2).normal(0.0, 0.1, program.num_variables)
+    fine, carried = program.refined(z)
+    assert fine.N == 12 and fine.uneven_shares is None
+    X, U = program.states(z), program.node_controls(z)
+    h = program.final_time(z) / program.N
+    f = np.array([np.asarray(program.rate(X[k], U[k], k * h)).ravel() for k in range(program.N + 1)])
+    assert np.allclose(fine.states(carried)[1::2], 0.5 * (X[:-1] + X[1:]) + h / 8 * (f[:-1] - f[1:]), rtol=0,
+                       atol=1e-12)
+    assert np.array_equal(fine.states(carried)[0::2], X)
