@@ -32,22 +32,9 @@ def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: 
     constraints (with their margins), cones, objective epigraph and linear constraints, from ``z0``
     (default: its guess)."""
     started = time.perf_counter()
-    z = ca.SX.sym("z", program.num_variables)
-    objective = ca.dot(ca.DM(program.linear_cost()), z)
-    weights = program.residual_weights()
-    if weights.size:
-        select = program._energy_rows[0]
-        objective += ca.dot(ca.DM(weights), (ca.DM(select.toarray()) @ z) ** 2)
-    defects, _ = program._defects(z)
-    path, _ = program._path(z)
-    path_equalities, _ = program._path_equalities(z)
-    boundary_equalities, _ = program._boundary_equalities(z)
-    epigraph, _ = program._objective_epigraph(z)
-    lin = program.linear_constraints()
-    A, G = ca.DM(lin.A.toarray()), ca.DM(lin.G.toarray())
-    blocks = [(defects, 0.0, 0.0), (path_equalities, 0.0, 0.0), (boundary_equalities, 0.0, 0.0),
-              (path + ca.DM(program.margins.path), -np.inf, 0.0), (epigraph, -np.inf, 0.0),
-              (A @ z - lin.b, 0.0, 0.0), (G @ z - lin.h, -np.inf, 0.0)]
+    nlp = program.symbolic_nlp()
+    z, objective = nlp.z, nlp.objective
+    blocks = [(expression, lower, upper) for _, expression, lower, upper in nlp.blocks]
     cones = program.evaluate(np.zeros(program.num_variables)).cones
     for cone in cones:
         # ||v_1:|| <= v_0 as v_1:.v_1: - v_0^2 <= 0 and v_0 >= 0, smooth for IPOPT (its feasibility tolerance then

@@ -56,6 +56,17 @@ class _Pattern:
 
 
 @dataclass(frozen=True)
+class SymbolicNLP:
+    """The NLP a transcription states, in CasADi: the decision vector ``z``, the objective (the linear cost plus the
+    weighted squared residuals) and the constraint blocks ``(name, expression, lower, upper)``, the repair margins
+    included; the second-order cones are left to :meth:`Transcription.evaluate` (exact affine maps)."""
+
+    z: ca.SX
+    objective: ca.SX
+    blocks: tuple[tuple[str, ca.SX, float, float], ...]
+
+
+@dataclass(frozen=True)
 class Margins:
     """How much tighter than stated a repair made each path-constraint row (in the order of the path vector) and
     each node state bound (the states' part of ``z``)."""
@@ -508,6 +519,23 @@ class Transcription:
             values[self._cone_first_rows] -= self.margins.cone * self._cone_margin_scale
             cones = (ConeBlock("cone_constraints", values, W_coo if jacobians else None, self.cone_sizes, "scaled"),)
         return Evaluation(residuals, residual_jacobian, inequalities, equalities, cones)
+
+    def symbolic_nlp(self) -> SymbolicNLP:
+        """The program as one CasADi NLP (:class:`SymbolicNLP`): what an independent solver of the same problem (the
+        IPOPT reference, the benchmarks) reads."""
+        z = ca.SX.sym("z", self.num_variables)
+        objective = ca.dot(ca.DM(self.linear_cost()), z)
+        if self.residual_weights().size:
+            objective += ca.dot(ca.DM(self.residual_weights()), (ca.DM(self._energy_rows[0].toarray()) @ z) ** 2)
+        lin = self.linear_constraints()
+        blocks = (("dynamics_defects", self._defects(z)[0], 0.0, 0.0),
+                  ("path_equalities", self._path_equalities(z)[0], 0.0, 0.0),
+                  ("boundary_equalities", self._boundary_equalities(z)[0], 0.0, 0.0),
+                  ("path_constraints", self._path(z)[0] + ca.DM(self.margins.path), -np.inf, 0.0),
+                  ("objective_epigraph", self._objective_epigraph(z)[0], -np.inf, 0.0),
+                  ("linear_equalities", ca.DM(lin.A.toarray()) @ z - lin.b, 0.0, 0.0),
+                  ("linear_inequalities", ca.DM(lin.G.toarray()) @ z - lin.h, -np.inf, 0.0))
+        return SymbolicNLP(z, objective, blocks)
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
         """CasADi's exact :math:`\\sum \\lambda_k \\nabla^2 e_k + \\sum \\mu_j \\nabla^2 g_j` (the energy residuals are
