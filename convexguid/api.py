@@ -31,17 +31,14 @@ def _spec(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | No
     return load_problem(problem, overrides)
 
 
-def check_resolved(spec: ProblemSpec, overridable: bool = True) -> None:
-    """Refuse a problem that still takes an input from another case's result (only validate resolves it).
-
-    ``overridable``: the command takes ``--set`` (the message shows the overrides that would do instead).
-    """
+def check_resolved(spec: ProblemSpec) -> None:
+    """Refuse a problem that still takes an input from another case's result (the command line resolves it,
+    :func:`convexguid.validation.links.resolve_links`; the Python API does not solve another problem unasked)."""
     for key, link_key, link in spec.input_links():
-        instead = (f"set {key} instead (e.g. --set {link_key}=null --set {key}=<value>)" if overridable
-                   else f"give {key} in the file instead (with {link_key}: null)")
         raise SpecError(f"{spec.source}: {link_key}: takes {link.figure} from the result of problem {link.problem!r}, "
-                        f"which only `convexguid validate` resolves; run this file through convexguid validate "
-                        f"together with that problem's file, or {instead}")
+                        f"which the Python API does not solve; resolve it first (convexguid.validation.links."
+                        f"resolve_links, as the convexguid commands do), or set {key} instead (overrides "
+                        f"'{link_key}=null', '{key}=<value>')")
 
 
 def check_runnable(spec: ProblemSpec) -> Family:
@@ -72,8 +69,8 @@ def solve(problem: str | Path | ProblemSpec, overrides: Sequence[str] | str | No
     ------
     SpecError
         For invalid input (arguments of the wrong type included), a problem above its family's size limit, or an
-        input taken from another case's result (e.g. ``boundary.tf_from``), which only
-        :func:`convexguid.validation.run.validate` resolves.
+        input taken from another case's result (e.g. ``boundary.tf_from``; resolve it first with
+        :func:`convexguid.validation.links.resolve_links`).
     """
     optional_callable("log", log)
     spec = _spec(problem, overrides)

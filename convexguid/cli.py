@@ -22,6 +22,7 @@ from convexguid.progress import run
 if TYPE_CHECKING:
     from convexguid.scp.engine import IterationRecord
     from convexguid.solution import Solution
+    from convexguid.spec import ProblemSpec
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -149,15 +150,42 @@ def _report_lost_outputs(sol: Solution, args: argparse.Namespace, failed: list[s
     print(f"convexguid: could not write {'; '.join(failed)}; {where}", file=sys.stderr)
 
 
-def _cmd_solve(args: argparse.Namespace) -> int:
-    from convexguid.api import check_runnable, solve
+def _runnable_problem(args: argparse.Namespace) -> ProblemSpec:
+    """The problem file with ``--set`` applied, the outputs checked, and each input it takes from another case's
+    result resolved by solving the problem file named so beside it first, as validate does
+    (:mod:`convexguid.validation.links`). Bad input (the file, a link, an output) is refused before anything is
+    solved."""
+    from convexguid.api import check_runnable
+    from convexguid.families import get_family
     from convexguid.problem_files import load_problem
+    from convexguid.validation.links import linked_cases
+
+    spec = load_problem(args.problem, args.overrides)
+    linked = linked_cases(spec)
+    for case in (*linked, spec):
+        get_family(case.family).check_size(case)
+    _check_outputs(args)
+    if linked:
+        spec = _resolved(spec, linked, args.command, args.quiet)
+    check_runnable(spec)
+    return spec
+
+
+def _resolved(spec: ProblemSpec, linked: list[ProblemSpec], command: str, quiet: bool) -> ProblemSpec:
+    """``spec`` with its input links resolved by solving ``linked`` first (a status line names them; without
+    ``quiet`` a line before each and one with the values taken)."""
+    from convexguid.validation.links import resolve_links
+
+    names = ", ".join(case.name for case in linked)
+    return run(lambda: resolve_links(spec, linked, None if quiet else print), f"{command} {spec.name}: solve {names}")
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from convexguid.api import solve
 
     if args.problem.suffix == ".py":
         return _solve_module(args)
-    spec = load_problem(args.problem, args.overrides)
-    check_runnable(spec)
-    _check_outputs(args)
+    spec = _runnable_problem(args)
     if not args.quiet:
         _print_header()
     sol = run(lambda: solve(spec, log=None if args.quiet else _print_row), f"solve {spec.name}")
@@ -190,13 +218,10 @@ def _finish(sol: Solution, args: argparse.Namespace) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from convexguid.api import check_runnable, simulate
+    from convexguid.api import simulate
     from convexguid.families import get_family
-    from convexguid.problem_files import load_problem
 
-    spec = load_problem(args.problem, args.overrides)
-    check_runnable(spec)
-    _check_outputs(args)
+    spec = _runnable_problem(args)
     family = get_family(spec.family)
     if not args.quiet and family.console_header is not None:
         print(family.console_header(spec))
@@ -241,11 +266,12 @@ def _print_verdicts(results) -> None:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from convexguid.api import PLANNER, check_resolved
+    from convexguid.api import PLANNER
     from convexguid.backends import check_backend_name
     from convexguid.families import FAMILIES, get_family
     from convexguid.problem_files import load_problem
     from convexguid.threads import single_threaded
+    from convexguid.validation.links import linked_cases
 
     counts = [("--repeat", args.repeat), ("--runs", args.runs), *(("--nodes", n) for n in args.nodes or ())]
     for option, value in counts:
@@ -257,12 +283,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         except ConvexGuidError as exc:
             raise SpecError(f"--backends: {exc}") from None
     spec = load_problem(args.problem)
-    check_resolved(spec, overridable=False)  # an input waiting for another case's result: only validate has it
     family = get_family(spec.family)
     if family.bench is None:
         benched = ", ".join(name for name, f in FAMILIES.items() if f.bench is not None)
         raise SpecError(f"{args.problem}: family {family.name!r} has no benchmark; "
                         f"convexguid bench handles: {benched}")
+    linked = linked_cases(spec)
+    if linked:
+        spec = _resolved(spec, linked, args.command, quiet=False)
     with single_threaded():
         return run(lambda: family.bench(spec, args, PLANNER), f"bench {args.problem}")
 

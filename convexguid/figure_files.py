@@ -1,9 +1,12 @@
-"""Figure files: a labelled time history saved, a figure written atomically, two pictures compared.
+"""Figure files: a labelled time history saved, a figure written atomically, a redrawn figure kept or replaced.
 
 Every figure is written to a temporary file renamed into place, and a PNG carries no metadata that names the
-matplotlib version, so one picture is one file's bytes. A report's pictures are replaced only when what they show
-changed (:func:`keep_unchanged_pictures`): a plot redrawn from data that differ in their last bits may shade a
-few edge pixels differently, and its file then changes although nobody could see it.
+matplotlib version or a date, so one drawing is one file's bytes. It carries instead the record of what it shows
+(:class:`~convexguid.plot_record.PlotRecord`): a figure drawn again is written only when what it shows changed
+beyond the tolerance (:func:`write_figure` leaves an agreeing file as it is, bytes and modification time;
+:func:`keep_unchanged_pictures` puts an agreeing committed file back over a fresh one). A plot redrawn from data
+that differ in their last bits may shade a few edge pixels differently, and its file would otherwise change
+although nobody could see it.
 
 The families' plot modules and the campaign report draw with these; matplotlib is imported when something is
 drawn.
@@ -11,13 +14,13 @@ drawn.
 
 from __future__ import annotations
 
+import filecmp
 import shutil
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-import numpy as np
-
 from convexguid.outputs import atomic_file
+from convexguid.plot_record import RECORD_KEY, PlotRecord
 
 Save = Callable[..., Path]
 """The figure writer a family's ``plot`` hook is handed: ``save(fig, ax, title, ylabel, path)``, :func:`save_figure`."""
@@ -36,43 +39,42 @@ def save_figure(fig, ax, title: str, ylabel: str, path: Path, xlabel: str = "tim
 
 def write_figure(fig, path: Path, dpi: float | None = None) -> Path:
     """Write ``fig`` to ``path`` atomically (:func:`~convexguid.outputs.atomic_file`; the format from the
-    suffix, e.g. ``.png``; ``dpi`` as for ``savefig``, the figure's own if None) and close it; return ``path``."""
+    suffix, e.g. ``.png``; ``dpi`` as for ``savefig``, the figure's own if None) and close it; return ``path``.
+
+    A PNG carries its :class:`~convexguid.plot_record.PlotRecord` and no version; a PNG already at ``path`` whose
+    record agrees is left as it is (same bytes, same modification time).
+    """
     import matplotlib.pyplot as plt  # matplotlib only when something is drawn
 
     try:
+        fmt = Path(path).suffix.lstrip(".") or "png"
+        extra = {"dpi": dpi} if dpi else {}
+        if fmt == "png":
+            record = PlotRecord.of_figure(fig, dpi)
+            previous = PlotRecord.of_file(path)
+            if previous is not None and record.agrees(previous):
+                return path
+            extra["metadata"] = {"Software": None, RECORD_KEY: record.encode()}
         with atomic_file(path, "wb") as fh:
-            fmt = Path(path).suffix.lstrip(".") or "png"
-            fixed = {"metadata": {"Software": None}} if fmt == "png" else {}
-            fig.savefig(fh, format=fmt, **({"dpi": dpi} if dpi else {}), **fixed)
+            fig.savefig(fh, format=fmt, **extra)
     finally:
         plt.close(fig)
     return path
 
 
-PIXEL_LEVEL = 0.1
-"""A pixel differs when one of its channels moved by more than this (on the 0-1 scale)."""
-
-PIXEL_SHARE = 1e-3
-"""Two pictures are the same when at most this share of their pixels differ (anti-aliasing at line edges)."""
-
-
-def same_picture(first: Path, second: Path) -> bool:
-    """The two image files show the same picture: equal size, and at most :data:`PIXEL_SHARE` of the pixels
-    differing by more than :data:`PIXEL_LEVEL`."""
-    import matplotlib.image as mpimg  # matplotlib only when pictures are compared
-
-    a, b = mpimg.imread(first), mpimg.imread(second)
-    if a.shape != b.shape:
-        return False
-    differing = np.abs(a.astype(float) - b.astype(float)) > PIXEL_LEVEL
-    if differing.ndim == 3:
-        differing = differing.any(axis=-1)
-    return float(differing.mean()) <= PIXEL_SHARE
+def same_plot(first: Path, second: Path) -> bool:
+    """The two figure files show the same: their plot records agree (:meth:`PlotRecord.agrees`), or, for files
+    without one (not PNG), their bytes are equal. A PNG drawn before records existed is the same as nothing."""
+    records = PlotRecord.of_file(first), PlotRecord.of_file(second)
+    if None not in records:
+        return records[0].agrees(records[1])
+    return first.suffix != ".png" and filecmp.cmp(first, second, shallow=False)
 
 
 def keep_unchanged_pictures(fresh: Iterable[Path], committed_folder: Path) -> None:
-    """Put back the committed file over each fresh picture that :func:`same_picture` finds unchanged."""
+    """Put the committed file back (its bytes and modification time) over each fresh picture that shows the same
+    (:func:`same_plot`)."""
     for path in fresh:
         committed = committed_folder / path.name
-        if committed.is_file() and same_picture(path, committed):
-            shutil.copyfile(committed, path)
+        if committed.is_file() and same_plot(path, committed):
+            shutil.copy2(committed, path)

@@ -21,7 +21,8 @@ from convexguid.scp.problem import ProgramSize
 from convexguid.solution import Solution
 from convexguid.validation import comparisons
 from convexguid.validation.comparisons import TABLES, check_comparisons, comparison_sections, comparison_timings
-from convexguid.validation.run import CaseResult, link_values, run_order
+from convexguid.validation.links import link_values, linked_cases, run_order
+from convexguid.validation.run import CaseResult
 from convexguid.verification import ConstraintCheck, Verification
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
@@ -127,12 +128,18 @@ def test_bad_tf_from_is_a_one_line_error(overrides, needle):
     assert "\n" not in str(err.value) and needle in str(err.value)
 
 
-def test_solving_an_unresolved_link_is_refused(capsys):
-    with pytest.raises(SpecError, match="only `convexguid validate` resolves.*set boundary.tf_s"):
+def test_the_api_refuses_an_unresolved_link_and_the_command_checks_it_before_solving(capsys):
+    with pytest.raises(SpecError, match="the Python API does not solve; resolve it first.*set boundary.tf_s"):
         solve(GUO_ENERGY)
-    assert main(["solve", str(GUO_ENERGY), "--quiet"]) == 2
+    assert main(["solve", str(GUO_ENERGY), "--quiet", "--set", "boundary.tf_from.figure=maneuver_time_s"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "boundary.tf_from" in err and "convexguid validate" in err
+    assert err.count("\n") == 1 and "boundary.tf_from.figure: not a figure of 'guo2011-adaptive'" in err
+
+
+def test_linked_cases_are_read_from_the_files_beside_the_problem():
+    cases = linked_cases(load_problem(GUO_ENERGY))
+    assert [(case.name, Path(case.source).name) for case in cases] == [("guo2011-adaptive", GUO[0].name)]
+    assert linked_cases(load_problem(GUO[1])) == []
 
 
 def test_linked_cases_run_after_the_case_they_name():

@@ -9,6 +9,7 @@ import _thread
 import io
 import multiprocessing
 import os
+import shutil
 import threading
 import time
 from pathlib import Path
@@ -211,10 +212,12 @@ def test_bench_arguments_are_checked_before_anything_runs(args, expected, capsys
     assert expected in _one_line_error(capsys)
 
 
-def test_bench_of_a_file_waiting_for_another_result_names_its_own_key(capsys):
-    assert main(["bench", str(PROBLEMS / "guo2011_lpmpc_track.yaml")]) == 2
+def test_bench_of_a_file_whose_linked_problem_is_missing_names_its_own_key(tmp_path, capsys):
+    lonely = tmp_path / "guo2011_lpmpc_track.yaml"
+    shutil.copyfile(PROBLEMS / lonely.name, lonely)
+    assert main(["bench", str(lonely)]) == 2
     line = _one_line_error(capsys)
-    assert "guo2011_lpmpc_track.yaml: nominal.tf_from:" in line and "give nominal.tf_s in the file" in line, line
+    assert "guo2011_lpmpc_track.yaml: nominal.tf_from.problem:" in line and "give nominal.tf_s instead" in line, line
     assert "--set" not in line  # bench takes no overrides
 
 

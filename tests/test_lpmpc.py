@@ -5,6 +5,8 @@ Long runs (the 200-run Monte Carlo) belong to ``convexguid validate``; here the 
 
 from __future__ import annotations
 
+import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +18,7 @@ from convexguid.cli import main
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 SINGLE = PROBLEMS / "feng2018_lpmpc_single.yaml"
 MONTE_CARLO = PROBLEMS / "feng2018_lpmpc_montecarlo.yaml"
+TRACK = PROBLEMS / "guo2011_lpmpc_track.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -115,3 +118,24 @@ def test_a_padded_plan_is_flown_against_the_limit_as_written():
     assert [bound for _, _, bound in scenario.forbidden] == [10.0]
     planned = [c for c in nominal.verification.checks if c.name.startswith("forbidden")][0]
     assert planned.bound == 10.5 and planned.worst >= 10.5 - 1e-6
+
+
+def test_simulate_solves_the_problem_a_linked_input_names_first(tmp_path, capsys):
+    """guo2011_lpmpc_track takes its nominal's final time from guo2011-adaptive's result (``nominal.tf_from``):
+    ``convexguid simulate`` flies that case's file (beside it) first, as validate does, and takes the figure."""
+    summary = tmp_path / "summary.json"
+    assert main(["simulate", str(TRACK), "--summary-json", str(summary)]) == 0
+    out = capsys.readouterr().out
+    assert f"solving {PROBLEMS / 'guo2011_adaptive.yaml'} first" in out
+    assert "guo2011-lpmpc-track: nominal.tf_s = 196.8 (from guo2011-adaptive: converged)" in out
+    assert json.loads(summary.read_text())["status"] == "converged"
+
+
+def test_a_linked_problem_missing_beside_the_file_is_one_line_before_anything_runs(tmp_path, capsys):
+    lonely = tmp_path / TRACK.name
+    shutil.copyfile(TRACK, lonely)
+    assert main(["simulate", str(lonely), "--quiet"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1, captured
+    assert f"{lonely}: nominal.tf_from.problem: no problem file in {tmp_path} has that name " \
+           "(got 'guo2011-adaptive')" in captured.err

@@ -146,7 +146,8 @@ def test_scp_plan_uses_less_energy_than_the_controller_at_its_maneuver_time():
     table renders the three results it is given, in that order, and solves nothing itself.
     """
     from convexguid.validation.comparisons import comparison_sections
-    from convexguid.validation.run import CaseResult, link_values
+    from convexguid.validation.links import link_values
+    from convexguid.validation.run import CaseResult
 
     # The files' own 50-interval grid: on a 16-interval grid the minimum-energy SCP ends in a slow tail
     # (the path grazes the forbidden cone at a node and a midpoint; 80-140 iterations), which would make

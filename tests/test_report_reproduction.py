@@ -3,7 +3,8 @@
 * Printed numbers agree within the reproduction tolerance plus the resolution they were printed at, so a value
   that straddles a rounding boundary on another machine is the same line; a count must match.
 * ``convexguid validate`` keeps every committed line a fresh run agrees with, and every committed picture a
-  fresh one shows the same (PNG files carry no version metadata).
+  fresh one shows the same within the tolerance (the plot record each PNG carries; no version metadata): writing
+  the same figure again leaves its file alone, bytes and modification time.
 * ``convexguid validate --check`` writes nothing, passes on a problem file whose numbers moved by 1e-12 (what
   another machine's rounding does) and fails naming the line when a committed figure was edited.
 """
@@ -11,6 +12,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import matplotlib
@@ -21,7 +23,8 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
 from convexguid.cli import main  # noqa: E402
-from convexguid.figure_files import keep_unchanged_pictures, same_picture, write_figure  # noqa: E402
+from convexguid.figure_files import keep_unchanged_pictures, same_plot, write_figure  # noqa: E402
+from convexguid.plot_record import PlotRecord  # noqa: E402
 from convexguid.spec.loader import read_yaml_mapping  # noqa: E402
 from convexguid.spec.perturb import perturb_inputs  # noqa: E402
 from convexguid.validation.reproduction import PrintedNumber, lines_agree, reconcile, skeleton  # noqa: E402
@@ -67,29 +70,54 @@ def test_reconcile_keeps_agreeing_committed_lines_and_names_the_others():
 # --- pictures -----------------------------------------------------------------------------------------------------
 
 
-def _plot(path: Path, shift: float) -> Path:
+def _plot(path: Path, shift: float, width: float = 1.5) -> Path:
     t = np.linspace(0.0, 10.0, 400)
     fig, ax = plt.subplots(figsize=(4, 3))
-    ax.plot(t, np.sin(t) + shift)
+    ax.plot(t, np.sin(t) + shift, lw=width)
     return write_figure(fig, path)
+
+
+def test_writing_the_same_figure_again_leaves_the_file_alone(tmp_path):
+    path = _plot(tmp_path / "a.png", 0.0)
+    before, stamp = path.read_bytes(), path.stat().st_mtime_ns
+    os.utime(path, ns=(stamp - 10**9, stamp - 10**9))  # a second older: a rewrite would show on any file system
+    stamp = path.stat().st_mtime_ns
+    for shift in (0.0, 1e-9):  # the same data, then data moved by round-off
+        _plot(path, shift)
+        assert path.read_bytes() == before and path.stat().st_mtime_ns == stamp
+    assert b"Matplotlib" not in before  # no version metadata: one drawing is one file's bytes
+    assert PlotRecord.of_file(path) is not None
+
+
+def test_a_figure_is_rewritten_when_what_it_shows_changes_beyond_the_tolerance(tmp_path):
+    path = _plot(tmp_path / "a.png", 0.0)
+    record = PlotRecord.of_file(path)
+    for shift, width in ((2e-3, 1.5), (0.0, 1.7)):  # a curve moved by a tenth of a point; a wider line
+        stamp = path.stat().st_mtime_ns
+        os.utime(path, ns=(stamp - 10**9, stamp - 10**9))
+        _plot(path, shift, width)
+        assert path.stat().st_mtime_ns != stamp - 10**9 and not PlotRecord.of_file(path).agrees(record)
+    assert PlotRecord.decode(record.encode()).agrees(record)
+    assert PlotRecord.decode("not a record") is None and PlotRecord.of_file(tmp_path / "missing.png") is None
 
 
 def test_a_picture_redrawn_from_round_off_changed_data_keeps_its_committed_file(tmp_path):
     committed, fresh, moved = tmp_path / "committed", tmp_path / "fresh", tmp_path / "moved"
     for folder in (committed, fresh, moved):
         folder.mkdir()
-    _plot(committed / "a.png", 0.0)
-    again = _plot(fresh / "a.png", 0.0)
-    assert again.read_bytes() == (committed / "a.png").read_bytes()  # no metadata that changes between runs
-    nudged = _plot(fresh / "b.png", 1e-9)
     _plot(committed / "b.png", 0.0)
-    assert same_picture(nudged, committed / "b.png")
+    nudged = _plot(fresh / "b.png", 1e-9)
+    assert same_plot(nudged, committed / "b.png")
     keep_unchanged_pictures([nudged], committed)
     assert nudged.read_bytes() == (committed / "b.png").read_bytes()
+    assert nudged.stat().st_mtime_ns == (committed / "b.png").stat().st_mtime_ns
     different = _plot(moved / "b.png", 0.5)
-    assert not same_picture(different, committed / "b.png")
+    assert not same_plot(different, committed / "b.png")
     keep_unchanged_pictures([different], committed)
     assert different.read_bytes() != (committed / "b.png").read_bytes()
+    legacy = committed / "c.png"  # drawn before pictures carried their record: replaced once
+    plt.imsave(legacy, np.zeros((3, 4)))
+    assert not same_plot(_plot(fresh / "c.png", 0.0), legacy)
 
 
 # --- validate --check ---------------------------------------------------------------------------------------------

@@ -368,8 +368,9 @@ class ComparisonEntry(SpecModel):
 class ResultLink(SpecModel):
     """An input taken from another case's result: figure ``figure`` of the summary of problem ``problem``.
 
-    Only ``convexguid validate`` resolves it (it solves ``problem`` first and passes the figure in as an
-    override); a plain ``convexguid solve`` of a file with an unresolved link is an error.
+    The commands resolve it (:mod:`convexguid.validation.links`: they solve ``problem`` first, ``validate`` among
+    its cases and ``solve``, ``simulate``, ``bench`` from the problem file of that name beside this one, and
+    pass the figure in as an override); the Python API refuses a problem with an unresolved link.
 
     Attributes
     ----------
@@ -460,7 +461,7 @@ class ProblemBase(SpecModel):
     def input_links(self) -> tuple[InputLink, ...]:
         """Inputs still to be taken from other cases' results (e.g. ``boundary.tf_from``); none by default.
 
-        ``convexguid validate`` resolves each by solving ``link.problem`` first and loading this problem
-        again with the overrides ``<link_key>=null`` and ``<key>=<figure value>``.
+        The commands resolve each (:mod:`convexguid.validation.links`) by solving ``link.problem`` first and
+        loading this problem again with the overrides ``<link_key>=null`` and ``<key>=<figure value>``.
         """
         return ()

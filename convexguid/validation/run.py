@@ -19,7 +19,8 @@ paths are checked before anything is solved; each case's figures folder is repla
 
 A case may take an input from another case's result (``boundary.tf_from: {problem, figure}``, see
 :meth:`~convexguid.spec.common.ProblemBase.input_links`): the runner solves the cases in an order where
-each such case comes after the one it names, and sets the key to the figure's value. Cases whose
+each such case comes after the one it names, and sets the key to the figure's value
+(:mod:`convexguid.validation.links`, shared with ``solve``, ``simulate`` and ``bench``). Cases whose
 ``reference.comparison`` names the same table are set side by side by :mod:`convexguid.validation.comparisons`,
 which renders the results and solves nothing.
 """
@@ -34,7 +35,6 @@ from pathlib import Path
 from typing import Any
 
 from convexguid.api import solve
-from convexguid.errors import SpecError
 from convexguid.families import get_family
 from convexguid.figure_files import keep_unchanged_pictures
 from convexguid.outputs import check_output_file, check_output_folder, staged_folder, write_text_atomic
@@ -43,6 +43,7 @@ from convexguid.solution import Solution
 from convexguid.solution_plots import plot_solution
 from convexguid.spec import ProblemSpec, with_values
 from convexguid.validation.comparisons import check_comparisons, comparison_sections, comparison_timings
+from convexguid.validation.links import run_order, solve_in_order
 from convexguid.validation.reproduction import LineDifference, reconcile
 from convexguid.validation.timings import render_timings, timings_path
 
@@ -124,72 +125,6 @@ def run_case(spec: ProblemSpec, figure_root: Path, values: Mapping[str, Any] | N
     return CaseResult(spec, solution, compare(spec, solution), figures)
 
 
-def run_order(specs: Sequence[ProblemSpec]) -> list[int]:
-    """Indices of ``specs`` in the order to solve them: each case after the cases its input links name.
-
-    Otherwise the given order is kept.
-
-    Raises
-    ------
-    SpecError
-        If a link names a problem that is not among ``specs`` (or is the case itself, or is named by two
-        cases), a figure that is not a field of the named problem's family's figures type, or the links
-        form a cycle.
-    """
-    index: dict[str, int] = {}
-    for i, spec in enumerate(specs):
-        if index.setdefault(spec.name, i) != i:
-            raise SpecError(f"{spec.source}: name: {specs[index[spec.name]].source} has the same name "
-                            f"(got {spec.name!r}); give every validated problem its own name")
-    needs: list[set[int]] = []
-    for spec in specs:
-        deps = set()
-        for _, link_key, link in spec.input_links():
-            where = f"{spec.source}: {link_key}.problem"
-            if link.problem not in index or link.problem == spec.name:
-                raise SpecError(f"{where}: not another case of this validation run (got {link.problem!r}); "
-                                f"name one of: {', '.join(n for n in index if n != spec.name)}")
-            known = get_family(specs[index[link.problem]].family).figures.names()
-            if link.figure not in known:
-                raise SpecError(f"{spec.source}: {link_key}.figure: not a figure of {link.problem!r} "
-                                f"(got {link.figure!r}); its figures: {', '.join(sorted(known))}")
-            deps.add(index[link.problem])
-        needs.append(deps)
-    order: list[int] = []
-    while len(order) < len(specs):
-        ready = next((i for i in range(len(specs)) if i not in order and needs[i] <= set(order)), None)
-        if ready is None:
-            stuck = [i for i in range(len(specs)) if i not in order]
-            raise SpecError(f"{specs[stuck[0]].source}: input links form a cycle among "
-                            f"{', '.join(specs[i].name for i in stuck)}; "
-                            "a case can only take inputs from cases that do not depend on it")
-        order.append(ready)
-    return order
-
-
-def link_values(spec: ProblemSpec, solved: dict[str, Solution]) -> dict[str, Any]:
-    """The values that resolve ``spec``'s input links from the solutions of the cases they name, by dotted key.
-
-    Each link ``<link_key>: {problem, figure}`` giving ``<key>`` sets ``<link_key>`` to None and ``<key>`` to that
-    problem's figure (:meth:`~convexguid.solution.Solution.figure`), the number itself (no text round trip).
-
-    Raises
-    ------
-    SpecError
-        If the named result lacks the figure or it is not a finite number (e.g. the maneuver was never
-        completed).
-    """
-    values: dict[str, Any] = {}
-    for key, link_key, link in spec.input_links():
-        linked = solved[link.problem]
-        value = linked.figure(link.figure) if link.figure in linked.figure_names() else None
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-            raise SpecError(f"{spec.source}: {link_key}: the result of {link.problem!r} has no finite "
-                            f"{link.figure} (got {value!r}); fix that case, or set {key} in this file")
-        values.update({link_key: None, key: float(value)})
-    return values
-
-
 def reference_problems(directory: Path = DEFAULT_PROBLEMS_DIR) -> list[Path]:
     """Problem files in ``directory`` that carry a ``reference:`` block."""
     return [p for p in sorted(directory.glob("*.yaml")) if load_problem(p).reference is not None]
@@ -243,16 +178,11 @@ def check(problems: Iterable[str | Path] = (), report: str | Path = DEFAULT_REPO
 
 def _run_all(problems: Iterable[str | Path], figure_root: Path, publish: bool) -> list[CaseResult]:
     """Every case solved in :func:`run_order`, returned in the order given."""
-    paths = [Path(p) for p in problems] or reference_problems()
-    specs = [load_problem(p) for p in paths]
-    order = run_order(specs)
+    specs = [load_problem(p) for p in problems] or [load_problem(p) for p in reference_problems()]
+    run_order(specs)  # the links checked before the comparisons, and before anything is solved
     check_comparisons(specs)
-    results: dict[int, CaseResult] = {}
-    solved: dict[str, Solution] = {}
-    for i in order:
-        results[i] = run_case(specs[i], figure_root, link_values(specs[i], solved), publish=publish)
-        solved[specs[i].name] = results[i].solution
-    return [results[i] for i in range(len(paths))]
+    return solve_in_order(specs, lambda spec, values: run_case(spec, figure_root, values, publish=publish),
+                          lambda result: result.solution)
 
 
 def _committed(report: Path) -> str | None:

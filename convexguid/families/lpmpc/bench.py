@@ -101,5 +101,15 @@ def run_lpmpc_bench(spec, planner: Planner, repeat: int, runs: int, output: Path
 
 
 def bench_command(spec, args: argparse.Namespace, planner: Planner) -> int:
-    """``convexguid bench`` on an ``lpmpc`` file (``--nodes`` and ``--backends`` do not apply)."""
+    """``convexguid bench`` on an ``lpmpc`` file (``--nodes`` and ``--backends`` do not apply).
+
+    Raises
+    ------
+    SpecError
+        If the file flies no LQR law (``lqr.r`` empty): the update table times LQR with its first weight and the
+        Monte Carlo pair flies LQR tracking beside LPMPC.
+    """
+    if not spec.lqr.r:
+        raise SpecError(f"{spec.source}: lqr.r: is empty, but the benchmark times LQR with its first weight and "
+                        "flies it beside LPMPC (got []); give at least one r in the file, e.g. [0.01]")
     return run_lpmpc_bench(spec, planner, args.repeat, getattr(args, "runs", 20), args.output)

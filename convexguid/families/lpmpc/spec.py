@@ -37,8 +37,8 @@ class NominalSource(SpecModel):
     """``problem``: the nominal's problem file (relative to this file); ``set``: overrides applied to it.
 
     ``tf_from``: the nominal's final time is a figure of another case's result (``{problem, figure}``, resolved
-    by ``convexguid validate`` into ``tf_s``, which then replaces the nominal's own ``boundary.tf_s`` or
-    ``boundary.tf_from``)."""
+    by the commands into ``tf_s``, :mod:`convexguid.validation.links`, which then replaces the nominal's own
+    ``boundary.tf_s`` or ``boundary.tf_from``)."""
 
     problem: NonEmptyStr
     set: list[str] = Field(default_factory=list)

@@ -91,9 +91,9 @@ class QuaternionBoundary(SpecModel):
     factor times the minimum time, which is solved for first.
 
     ``tf_from``: with ``objective: energy``, the final time is a figure of another case's result,
-    ``{problem: <name>, figure: <summary key>}`` (e.g. a controller's maneuver time). Only
-    ``convexguid validate`` resolves it (it runs that case first and sets ``tf_s``); give ``tf_s`` or
-    ``tf_from``, not both, and not with ``tf_min_time_factor``.
+    ``{problem: <name>, figure: <summary key>}`` (e.g. a controller's maneuver time). The
+    commands resolve it (they run that case first and set ``tf_s``, :mod:`convexguid.validation.links`); give
+    ``tf_s`` or ``tf_from``, not both, and not with ``tf_min_time_factor``.
     """
 
     t0_s: float = 0.0
