@@ -23,7 +23,8 @@ from scipy.integrate import solve_ivp
 from convexguid.ocp.boundary import boundary_errors
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.mesh import JUMP_SHARE, control_jumps, held_control, plan_refinement, refined_program
-from convexguid.ocp.transcription import Margins, Transcription
+from convexguid.ocp.parts import Margins
+from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
 

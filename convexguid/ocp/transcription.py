@@ -26,7 +26,7 @@ constraint); a terminal cost :math:`\\phi(x_N, t_f)` is a linear cost when affin
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -35,52 +35,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
+from convexguid.ocp.parts import Margins, SparsityPattern, SymbolicNLP, cone_scales
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
 from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
-
-
-class _Pattern:
-    """A CasADi structural sparsity read once; each evaluation only fills its values (the engine fixes the
-    subproblem's pattern from the first one)."""
-
-    def __init__(self, pattern: ca.Sparsity) -> None:
-        rows, cols = pattern.get_triplet()
-        self.rows, self.cols = np.asarray(rows, dtype=int), np.asarray(cols, dtype=int)
-        self.shape = pattern.shape
-
-    def coo(self, values: ca.DM) -> sp.coo_matrix:
-        return sp.coo_matrix((np.asarray(values.nonzeros(), dtype=float), (self.rows, self.cols)), shape=self.shape)
-
-
-@dataclass(frozen=True)
-class SymbolicNLP:
-    """The NLP a transcription states, in CasADi: the decision vector ``z``, the objective (the linear cost plus the
-    weighted squared residuals) and the constraint blocks ``(name, expression, lower, upper)``, the repair margins
-    included; the second-order cones are left to :meth:`Transcription.evaluate` (exact affine maps)."""
-
-    z: ca.SX
-    objective: ca.SX
-    blocks: tuple[tuple[str, ca.SX, float, float], ...]
-
-
-@dataclass(frozen=True)
-class Margins:
-    """How much tighter than stated a repair made each path-constraint row (in the order of the path vector) and
-    each node state bound (the states' part of ``z``)."""
-
-    path: np.ndarray
-    bounds: np.ndarray
-    violation: float = float("inf")
-    """The dense check's worst violation that led to these margins (the next repair must do better)."""
-    cone: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    """Each stated cone's tightening at each node it holds (its bound less this), in :attr:`cone_rows` order."""
-
-    @classmethod
-    def none(cls, path_rows: int, state_values: int, cone_rows: int = 0) -> Margins:
-        return cls(np.zeros(path_rows), np.zeros(state_values), cone=np.zeros(cone_rows))
 
 
 @dataclass(frozen=True)
@@ -268,18 +228,18 @@ class Transcription:
         self.num_path = path.shape[0]
         self._path_equalities = ca.Function("path_equalities", [z], [path_equalities,
                                                                       ca.jacobian(path_equalities, z)])
-        self._path_equality_pattern = _Pattern(ca.jacobian(path_equalities, z).sparsity())
+        self._path_equality_pattern = SparsityPattern(ca.jacobian(path_equalities, z).sparsity())
         self._boundary_equalities = ca.Function("boundary_equalities", [z], [boundary, ca.jacobian(boundary, z)])
-        self._boundary_pattern = _Pattern(ca.jacobian(boundary, z).sparsity())
+        self._boundary_pattern = SparsityPattern(ca.jacobian(boundary, z).sparsity())
         self._build_cones(z, V, cones)
         objective = self._epigraph(z, X[:, N], tf) if self.epigraph else ca.SX(0, 1)
         self._symbols = (z, ca.vertcat(defect, path_equalities, boundary), path, objective)
         self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
         self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
         self._objective_epigraph = ca.Function("epigraph", [z], [objective, ca.jacobian(objective, z)])
-        self._defect_pattern = _Pattern(ca.jacobian(defect, z).sparsity())
-        self._path_pattern = _Pattern(ca.jacobian(path, z).sparsity())
-        self._epigraph_pattern = _Pattern(ca.jacobian(objective, z).sparsity())
+        self._defect_pattern = SparsityPattern(ca.jacobian(defect, z).sparsity())
+        self._path_pattern = SparsityPattern(ca.jacobian(path, z).sparsity())
+        self._epigraph_pattern = SparsityPattern(ca.jacobian(objective, z).sparsity())
 
     def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
         """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value: one
@@ -302,7 +262,7 @@ class Transcription:
         jacobian = ca.jacobian(stacked, z)
         constant = ca.Function("cone_map", [z], [jacobian, stacked])(np.zeros(self.num_variables))
         # the map is affine: its matrix, in both the forms an evaluation needs, is built here once
-        W = _Pattern(jacobian.sparsity()).coo(constant[0])
+        W = SparsityPattern(jacobian.sparsity()).coo(constant[0])
         row_scale = np.repeat(1.0 / cone_scales(W.tocsr(), self.variable_scale(), self.cone_sizes), self.cone_sizes)
         W = sp.coo_matrix((W.data * row_scale[W.row], (W.row, W.col)), shape=W.shape)
         self._cone_map = (W.tocsr(), W, np.asarray(constant[1]).ravel() * row_scale)
@@ -332,7 +292,7 @@ class Transcription:
         return np.repeat(self.per_step_weights(), self.slacks_per_value)
 
     @cached_property
-    def _hessian(self) -> tuple[ca.Function, _Pattern]:
+    def _hessian(self) -> tuple[ca.Function, SparsityPattern]:
         """The exact Lagrangian Hessian and its pattern, built when the engine's end game first asks for it."""
         z, defect, path, epigraph = self._symbols
         lam, mu, nu = (ca.SX.sym(name, e.shape[0]) for name, e in (("lam", defect), ("mu", path), ("nu", epigraph)))
@@ -340,7 +300,7 @@ class Transcription:
         if epigraph.shape[0]:
             lagrangian = lagrangian + ca.dot(nu, epigraph)
         hessian = ca.hessian(lagrangian, z)[0]
-        return ca.Function("hessian", [z, lam, mu, nu], [hessian]), _Pattern(hessian.sparsity())
+        return ca.Function("hessian", [z, lam, mu, nu], [hessian]), SparsityPattern(hessian.sparsity())
 
     @cached_property
     def _weights_per_step(self) -> np.ndarray:
@@ -544,12 +504,3 @@ class Transcription:
         mu = weights.inequality[: self.num_path]
         nu = weights.inequality[self.num_path:]
         return pattern.coo(function(z, weights.equality, mu, nu)).tocsr()
-
-
-def cone_scales(W: sp.csr_matrix, variable_scale: np.ndarray, sizes: tuple[int, ...]) -> np.ndarray:
-    """The magnitude of each cone's entries: the largest change of one of its rows when every variable moves by its
-    own scale, :math:`\\max_r \\sum_j |W_{rj}| \\sigma_j` (1 for a cone whose entries do not move)."""
-    reach = np.abs(W) @ variable_scale
-    ends = np.cumsum(sizes)
-    out = np.array([float(np.max(reach[end - size: end], initial=0.0)) for end, size in zip(ends, sizes, strict=True)])
-    return np.where(out > 0, out, 1.0)
