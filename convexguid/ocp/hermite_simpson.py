@@ -66,17 +66,17 @@ class HermiteSimpsonProgram(Transcription):
         return super().node_shares() if self.uneven_shares is None else self.uneven_shares
 
     def _steps(self) -> np.ndarray:
-        """Each interval's length in mean steps :math:`t_f / N` (on an uneven grid)."""
-        return np.diff(self.uneven_shares) * self.N
+        """Each interval's length in mean steps :math:`t_f / N` (exactly 1 on equal intervals)."""
+        return np.ones(self.N) if self.uneven_shares is None else np.diff(self.uneven_shares) * self.N
+
+    def _node_sums(self, divisor: float) -> np.ndarray:
+        """Each node's weight of a rule that gives it ``1 / divisor`` of each interval beside it, per mean step."""
+        steps = self._steps()
+        return (np.append(steps, 0.0) + np.insert(steps, 0, 0.0)) / divisor
 
     def _simpson_weights(self) -> tuple[np.ndarray, np.ndarray]:
         """Simpson's weights of the node and midpoint values per mean step :math:`t_f / N`."""
-        if self.uneven_shares is None:
-            node = np.full(self.N + 1, 2 / 6)
-            node[[0, -1]] = 1 / 6
-            return node, np.full(self.N, 4 / 6)
-        steps = self._steps()
-        return (np.append(steps, 0.0) + np.insert(steps, 0, 0.0)) / 6, 4 / 6 * steps
+        return self._node_sums(6.0), 4 / 6 * self._steps()
 
     def initial_guess(self) -> np.ndarray:
         """The base's, but on an uneven grid the user's node values (given on equal intervals) are interpolated
@@ -107,12 +107,7 @@ class HermiteSimpsonProgram(Transcription):
     def per_step_weights(self) -> np.ndarray:
         """Per mean step :math:`t_f / N` (on an uneven grid each interval weighs by its own length)."""
         if self.linear_control:  # the trapezoidal rule (for the fuel; the energy has its own rows)
-            if self.uneven_shares is not None:
-                steps = self._steps()
-                return (np.append(steps, 0.0) + np.insert(steps, 0, 0.0)) / 2
-            weights = np.ones(self.N + 1)
-            weights[[0, -1]] = 0.5
-            return weights
+            return self._node_sums(2.0)
         return np.concatenate(self._simpson_weights())
 
     @cached_property

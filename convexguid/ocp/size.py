@@ -28,13 +28,11 @@ BYTES_PER_COPY = 1500.0
 BYTES_PER_SPECTRAL_TERM = 300.0
 """Memory per term of the Chebyshev differentiation in the defect rows ((nodes)^2 x states of them)."""
 
-DENSE_END_GAME_VARIABLES = 3000
-"""Up to this many variables the SCP's end game holds a few dense n x n matrices
-(:data:`convexguid.scp.lagrangian.MAX_DENSE_SIZE`)."""
-
 
 def estimate_size(problem: Problem) -> SizeEstimate:
     """The peak memory of solving ``problem`` as stated, from its size and its dynamics' instruction count."""
+    from convexguid.scp.lagrangian import MAX_DENSE_SIZE  # the engine loads at the first solve, not with ocp
+
     nx, nu, N = len(problem.states), len(problem.controls), problem.intervals
     rate = ca.Function("rate", [problem.state_vector(), problem.control_vector(), problem.time],
                        [problem.rate_vector()])
@@ -44,7 +42,8 @@ def estimate_size(problem: Problem) -> SizeEstimate:
     if problem.method == "chebyshev":
         graph += BYTES_PER_SPECTRAL_TERM * (N + 1) ** 2 * nx
     variables = (N + 1) * (nx + 2 * nu) + 1
-    dense = 4 * 8.0 * variables**2 if variables <= DENSE_END_GAME_VARIABLES else 0.0
+    # up to MAX_DENSE_SIZE variables the SCP's end game holds a few dense n x n matrices
+    dense = 4 * 8.0 * variables**2 if variables <= MAX_DENSE_SIZE else 0.0
     return SizeEstimate(PROCESS_BYTES + graph + dense, "transcription.intervals", N,
                         f"{N} {problem.method} intervals x {copies} copies of the dynamics' {instructions} "
                         "instructions",
