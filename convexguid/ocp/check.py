@@ -4,8 +4,8 @@ The control is what the transcription holds between nodes (Hermite-Simpson's qua
 node; a zero- or first-order hold), held within the control's bounds (what the actuator can deliver).
 :func:`scipy.integrate.solve_ivp` (DOP853, rtol 1e-10) integrates the dynamics interval by interval from the given
 initial state; on a grid of ``points`` samples per interval the path constraints and the state bounds are
-evaluated, and at the end the propagated state is compared with the stated final values (scaled by each state's
-scale). A broken path constraint or state bound is repaired by tightening it on the intervals where it broke
+evaluated (a path equality in its magnitude), and at the end the propagated state is compared with the stated
+final values (scaled by each state's scale). A broken path constraint or state bound is repaired by tightening it on the intervals where it broke
 (:func:`~convexguid.scp.check_repair.grown_margin`) and re-solving warm. An error the grid makes (a final-state
 error, a violation the tightening stopped reducing, a broken path equality) is repaired by refining it: a
 Hermite-Simpson program splits the intervals whose local error exceeds its tolerance, where the dense check broke a
@@ -114,12 +114,12 @@ class DenseChecker:
         their two nodes and midpoint, by the worst excess there (grown each round, never at a node whose values
         are all fixed: there nothing can move). With nothing broken between nodes (a final-state error), when the
         last tightening left the worst violation above 90% of what it was, or for a broken path equality, the grid
-        is refined instead (:meth:`_refine`; None past :data:`MAX_INTERVALS`: the plan is ``unverified`` at once
+        is refined instead (:meth:`refine`; None past :data:`MAX_INTERVALS`: the plan is ``unverified`` at once
         instead of after the whole repair budget)."""
         worst_now = check.verification.max_violation
         if worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation:
             # nothing broken between nodes, or the last tightening did not reduce it: the grid is too coarse
-            return self._refine(program, z, check)
+            return self.refine(program, z, check)
         p, track, N = program.problem, check.track, program.N
         node_times = program.final_time(z) * program.node_shares()
         interval = np.clip(np.searchsorted(node_times, track.t, side="right") - 1, 0, N - 1)
@@ -151,13 +151,13 @@ class DenseChecker:
         old = program.margins
         if all(np.array_equal(a, b) for a, b in ((path, old.path), (bounds, old.bounds), (cone, old.cone))):
             # nothing to tighten: a broken path equality asks for a finer grid; anything else stays broken
-            return self._refine(program, z, check) if broken_equality else None
+            return self.refine(program, z, check) if broken_equality else None
         largest = max(path.max(initial=0.0), bounds.max(initial=0.0), cone.max(initial=0.0))
         return Repair(program.with_margins(Margins(path, bounds, worst_now, cone)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
                       f"margin {largest:.3g})")
 
-    def _refine(self, program: Transcription, z: np.ndarray, check: Check) -> Repair | None:
+    def refine(self, program: Transcription, z: np.ndarray, check: Check) -> Repair | None:
         """A finer grid with the plan carried over, at most :data:`MAX_INTERVALS` intervals; None when none fits.
         Hermite-Simpson splits where the error is (:func:`~convexguid.ocp.mesh.plan_refinement`: the local error,
         the constraints the dense check broke, a chattering control); the other transcriptions double every
@@ -184,6 +184,20 @@ class DenseChecker:
         return broken
 
     @staticmethod
+    def _equality_magnitudes(program: Transcription, track: DenseTrack) -> dict[int, float]:
+        """Each path equality's magnitude on the flown track (by constraint index): the largest change of its value
+        when every state and control moves by its own scale. A path equality is judged in it, as the defects are in
+        the states' scales: the singular arc of Goddard's rocket, a balance of forces near 100 lbf, drifts by 1e-5
+        lbf between nodes however fine the grid."""
+        reach = program.equality_magnitudes
+        if reach is None:
+            return {}
+        largest = np.max([np.asarray(reach(x, u, t), dtype=float).ravel()
+                          for t, x, u in zip(track.t, track.x, track.u, strict=True)], axis=0)
+        indices = [j for j, c in enumerate(program.problem.constraints) if c.equality]
+        return {j: float(m) if m > 0 else 1.0 for j, m in zip(indices, largest, strict=True)}
+
+    @staticmethod
     def _excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:
         """Each path constraint's and state bound's excess on the dense grid, by ``("path", j)`` or
         ``("bound", (state, is_upper))``; a constraint imposed over part of the maneuver (or at one node) is
@@ -195,11 +209,12 @@ class DenseChecker:
             values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
                                                                                  strict=True)])
             share = track.t / track.t[-1]
+            magnitude = DenseChecker._equality_magnitudes(program, track)
             nearest_node = np.min(np.abs(share[:, None] - program.node_shares()[None, :]), axis=1) < 1e-9
             for j, c in enumerate(p.constraints):
                 inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None
                           else (share >= c.during[0] - 1e-12) & (share <= c.during[1] + 1e-12))
-                excess = np.abs(values[:, j]) if c.equality else values[:, j]
+                excess = np.abs(values[:, j]) / magnitude[j] if c.equality else values[:, j]
                 out[("path", j)] = np.where(inside, excess, -np.inf)
         for i, v in enumerate(p.states):
             if v.upper is not None:

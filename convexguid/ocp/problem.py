@@ -113,6 +113,11 @@ class Problem:
         self.method = "hermite-simpson"
         self.substeps = 4
         self.time = ca.SX.sym("t")
+        self.phase_of: str | None = None
+        """The name of the :class:`~convexguid.ocp.phases.Phases` this problem is a phase of (None: alone)."""
+        self.ends: dict[str, tuple[str, int]] = {}
+        """Each reference :meth:`start` and :meth:`end` made, by its name: ``("start" or "end", index)``, the index
+        of a state, or -1 for the duration."""
 
     # --- declarations -----------------------------------------------------------------------------------------
     def _variable(self, kind: str, name: str, bounds, initial, final, scale, guess, unit: str = "") -> Variable:
@@ -235,7 +240,8 @@ class Problem:
                       during: tuple[float, float] | None = None) -> None:
         """``expression == 0`` along the trajectory (or the share ``during`` of it), e.g. a thrust of fixed
         magnitude; nonconvex allowed (the engine linearizes it). The dense check judges ``|expression|`` between
-        the nodes; where it breaks there the repair refines the grid (an equality cannot be tightened)."""
+        the nodes in its magnitude (its largest change on the flown track when every state and control moves by
+        its own scale); where it breaks there the repair refines the grid (an equality cannot be tightened)."""
         self.path_constraint(name, expression, unit, during)
         self.constraints[-1] = replace(self.constraints[-1], equality=True)
 
@@ -286,6 +292,34 @@ class Problem:
         """Whether a boundary constraint is affine in the states and free of the time (then hard linear rows)."""
         states = self.state_vector()
         return not ca.depends_on(expression, self.time) and not ca.depends_on(ca.jacobian(expression, states), states)
+
+    def start(self, state: ca.SX) -> ca.SX:
+        """A symbol for the value of ``state`` at the start of this problem, for a link between phases
+        (:meth:`~convexguid.ocp.phases.Phases.link`)."""
+        return self._end_reference("start", state)
+
+    def end(self, state: ca.SX) -> ca.SX:
+        """A symbol for the value of ``state`` (or of :attr:`time`: the duration) at the end of this problem, for
+        a link between phases (:meth:`~convexguid.ocp.phases.Phases.link`)."""
+        return self._end_reference("end", state)
+
+    @property
+    def duration(self) -> ca.SX:
+        """A symbol for this problem's duration (its final time), for a link between phases."""
+        return self.end(self.time)
+
+    def _end_reference(self, which: str, symbol: ca.SX) -> ca.SX:
+        names = [str(v.symbol) for v in self.states]
+        if str(symbol) == str(self.time) and which == "end":
+            index, label = -1, "duration"
+        elif str(symbol) in names:
+            index, label = names.index(str(symbol)), str(symbol)
+        else:
+            raise SpecError(f"{self.name}: {which}({symbol}): expected a state of this problem"
+                            f"{' or its time' if which == 'end' else ''} (states: {', '.join(names) or 'none'})")
+        name = f"{self.name}.{label}.{which}"
+        self.ends[name] = (which, index)
+        return ca.SX.sym(name)
 
     def initial_guess(self, states, controls) -> None:
         """Start the SCP from these node values (arrays of ``intervals + 1`` rows, a column per state and per
@@ -370,7 +404,7 @@ class Problem:
         if self.tf is None and self.tf_bounds is None:
             raise SpecError(f"{self.name}: final_time: not stated; call problem.final_time(fixed=...) or "
                             "problem.final_time(bounds=(lower, upper))")
-        if self.objective is None:
+        if self.objective is None and self.phase_of is None:
             raise SpecError(f"{self.name}: objective: not stated; call problem.minimize_time(), "
                             "problem.minimize_energy(), problem.minimize_fuel() or problem.minimize_terminal(...)")
         if self.objective == "time" and self.tf_bounds is None:

@@ -13,14 +13,16 @@ from convexguid.ocp.chebyshev import MappedChebyshevProgram
 from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.hold import FirstOrderHoldProgram, ZeroOrderHoldProgram
+from convexguid.ocp.phased import Link, PhasedChecker, PhasedProgram
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import solve_verified
 from convexguid.scp.engine import Log
 from convexguid.scp.problem import ProgramSize, SCPSettings
-from convexguid.solution import Figures, Solution, Trajectory, planned_solution
+from convexguid.solution import Figures, Solution, Trajectory, optional, planned_solution
 from convexguid.threads import single_threaded
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
+    from convexguid.ocp.phases import Phases
     from convexguid.ocp.problem import Problem
 
 
@@ -43,6 +45,8 @@ class OcpFigures(Figures):
     controls: tuple[str, ...] = ()
     parameters: dict[str, float] | None = None
     units: dict[str, str] | None = None
+    phases: dict[str, dict] | None = optional()
+    """A maneuver in phases: each phase's start and duration (s), transcription and intervals."""
 
 
 TRANSCRIPTIONS = {program.method: program
@@ -65,37 +69,95 @@ def program_size(program: Transcription, z: np.ndarray) -> ProgramSize:
                        program.num_path)
 
 
+def _settings(objectives: list[str | None], max_iterations: int) -> SCPSettings:
+    """The engine's settings for these objectives (of a problem, or of its phases)."""
+    if any(o in ("time", "terminal") for o in objectives):
+        # weights in units of the objective's size (the guessed final time; a terminal cost's change when the
+        # final state moves by its scales): an absolute weight let COPS' hang glider trade defects for range
+        return SCPSettings(max_iterations=max_iterations, penalty_unit="objective", penalty=30.0, penalty_max=3e6)
+    # the straight-line guess often has zero control energy: absolute weights, escalated when too small
+    return SCPSettings(max_iterations=max_iterations)
+
+
 def solve_problem(problem: Problem, max_iterations: int = 300, verification_points: int = 20,
                   log: Log | None = None) -> Solution:
     """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise (``log`` gets one
     record per SCP iteration)."""
     started = time.perf_counter()
     program = transcribe(problem)
-    if problem.objective in ("time", "terminal"):
-        # weights in units of the objective's size (the guessed final time; a terminal cost's change when the
-        # final state moves by its scales): an absolute weight let COPS' hang glider trade defects for range
-        settings = SCPSettings(max_iterations=max_iterations, penalty_unit="objective", penalty=30.0, penalty_max=3e6)
-    else:
-        # the straight-line guess often has zero control energy: absolute weights, escalated when too small
-        settings = SCPSettings(max_iterations=max_iterations)
     with single_threaded():
-        outcome = solve_verified(program, settings, DenseChecker(verification_points), log)
+        outcome = solve_verified(program, _settings([problem.objective], max_iterations),
+                                 DenseChecker(verification_points), log)
     final = outcome.program
-    z = final.unwrapped(outcome.x)
-    tf = final.final_time(z)
-    nodes_t = tf * final.node_shares()
-    columns = {v.name: final.states(z)[:, i] for i, v in enumerate(problem.states)}
-    columns |= {v.name: final.node_controls(z)[:, j] for j, v in enumerate(problem.controls)}
-    dense = None
-    if outcome.check is not None:
-        track = outcome.check.track
-        dense = Trajectory(track.t, {v.name: track.x[:, i] for i, v in enumerate(problem.states)}
-                           | {v.name: track.u[:, j] for j, v in enumerate(problem.controls)})
+    nodes, dense = _tables(final, outcome.x, outcome.check.track if outcome.check is not None else None)
     return planned_solution(_Statement(problem.name), outcome, started, program_size(final, outcome.x),
-                            nodes=Trajectory(nodes_t, columns), dense=dense,
-                            figures=OcpFigures(final_time_s=tf, states=tuple(v.name for v in problem.states),
-                                               controls=tuple(v.name for v in problem.controls),
-                                               parameters={name: float(columns[name][0])
-                                                           for name in problem.parameter_names} or None,
-                                               units={v.name: v.unit for v in (*problem.states, *problem.controls)
-                                                      if v.unit} or None))
+                            nodes=nodes, dense=dense, figures=_figures([problem], nodes, final.final_time(
+                                final.unwrapped(outcome.x))))
+
+
+def _tables(program: Transcription, x: np.ndarray, track, start: float = 0.0) -> tuple[Trajectory, Trajectory | None]:
+    """The node table and the dense table (None without a check) of one problem's plan, its time from ``start``."""
+    problem = program.problem
+    z = program.unwrapped(x)
+    columns = {v.name: program.states(z)[:, i] for i, v in enumerate(problem.states)}
+    columns |= {v.name: program.node_controls(z)[:, j] for j, v in enumerate(problem.controls)}
+    nodes = Trajectory(start + program.final_time(z) * program.node_shares(), columns)
+    if track is None:
+        return nodes, None
+    return nodes, Trajectory(start + track.t, {v.name: track.x[:, i] for i, v in enumerate(problem.states)}
+                             | {v.name: track.u[:, j] for j, v in enumerate(problem.controls)})
+
+
+def _figures(problems: list[Problem], nodes: Trajectory, final_time: float, phases=None) -> OcpFigures:
+    variables = [v for p in problems for v in (*p.states, *p.controls)]
+    return OcpFigures(final_time_s=final_time,
+                      states=tuple(dict.fromkeys(v.name for p in problems for v in p.states)),
+                      controls=tuple(dict.fromkeys(v.name for p in problems for v in p.controls)),
+                      parameters={name: _first(nodes.columns[name]) for p in problems
+                                  for name in p.parameter_names} or None,
+                      units={v.name: v.unit for v in variables if v.unit} or None, phases=phases)
+
+
+def _first(column: np.ndarray) -> float:
+    """A parameter's planned value: its first in the table (the phases without it leave NaN)."""
+    return float(column[~np.isnan(column)][0])
+
+
+def _joined(tables: list[Trajectory]) -> Trajectory:
+    """Phases' tables one after the other: every column any of them has (NaN where a phase has not), and
+    ``phase``, the index of the phase each row belongs to."""
+    names = list(dict.fromkeys(name for table in tables for name in table.columns))
+    columns = {"phase": np.concatenate([np.full(table.t.size, float(i)) for i, table in enumerate(tables)])}
+    for name in names:
+        columns[name] = np.concatenate([table.columns.get(name, np.full(table.t.size, np.nan)) for table in tables])
+    return Trajectory(np.concatenate([table.t for table in tables]), columns)
+
+
+def solve_phases(statement: Phases, started: float, max_iterations: int = 300, verification_points: int = 20,
+                 log: Log | None = None) -> Solution:
+    """Plan a maneuver in phases (:class:`~convexguid.ocp.phases.Phases`): every phase transcribed as it says, the
+    links, the engine's check-repair loop with every phase checked densely, one solution over the whole maneuver."""
+    programs = [transcribe(p) for p in statement.phases]
+    links = tuple(Link(name, expression) for name, expression in statement.links)
+    program = PhasedProgram(programs, links, statement.guess(programs))
+    with single_threaded():
+        outcome = solve_verified(program, _settings([p.objective for p in statement.phases], max_iterations),
+                                 PhasedChecker(verification_points), log)
+    final: PhasedProgram = outcome.program
+    checks = outcome.check.track.phases if outcome.check is not None else [None] * len(final.phases)
+    start, nodes, dense, phases = 0.0, [], [], {}
+    for t, piece, check in zip(final.phases, final.pieces(outcome.x), checks, strict=True):
+        node_table, dense_table = _tables(t, piece, check.track if check is not None else None, start)
+        nodes.append(node_table)
+        dense.append(dense_table)
+        duration = t.final_time(piece)
+        phases[t.problem.name] = {"start_s": start, "duration_s": duration, "method": t.method, "intervals": t.N}
+        start += duration
+    size = [program_size(t, piece) for t, piece in zip(final.phases, final.pieces(outcome.x), strict=True)]
+    links_rows = final.link_magnitudes.size
+    total = ProgramSize(final.num_variables, sum(s.num_equality_constraints for s in size) + links_rows,
+                        sum(s.num_inequality_constraints for s in size))
+    node_table = _joined(nodes)
+    return planned_solution(_Statement(statement.name), outcome, started, total, nodes=node_table,
+                            dense=_joined(dense) if outcome.check is not None else None,
+                            figures=_figures(statement.phases, node_table, start, phases))

@@ -165,7 +165,7 @@ class Transcription:
 
     def control_values(self, z: np.ndarray) -> np.ndarray:
         """The control values, shape ``(C, nu)``."""
-        return np.asarray(z[self.control_start: self.slack_start]).reshape(-1, self.nu)
+        return np.asarray(z[self.control_start: self.slack_start]).reshape(self.control_values_per_axis(), self.nu)
 
     def final_time(self, z: np.ndarray) -> float:
         return float(z[-1]) if self.free_time else float(self.problem.tf)
@@ -198,6 +198,11 @@ class Transcription:
         self.rate = ca.Function("rate", [x, u, t], [p.rate_vector()])
         self.constraint_values = (ca.Function("g", [x, u, t], [ca.vertcat(*(c.expression for c in p.constraints))])
                                   if p.constraints else None)
+        # each path equality's magnitude: the change of its value when every state and control moves by its scale
+        equalities = [c.expression for c in p.constraints if c.equality]
+        scales = ca.DM(np.concatenate([self.state_scales, [v.scale for v in p.controls]]))
+        self.equality_magnitudes = (ca.Function("reach", [x, u, t], [ca.mtimes(ca.fabs(ca.jacobian(
+            ca.vertcat(*equalities), ca.vertcat(x, u))), scales)]) if equalities else None)
         self.state_scale = ca.DM(self.state_scales)
         g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
         self.path_rows: list[tuple[str, int, int]] = []  # (node or mid, index, constraint) of each path row
@@ -319,9 +324,13 @@ class Transcription:
     def initial_guess_straight(self) -> np.ndarray:
         """States straight from their initial to their final values (the other given one where only one is),
         controls at their guess (else the middle of finite bounds, else 0), the final time at its guess."""
-        p, N = self.problem, self.N
-        s = np.linspace(0.0, 1.0, N + 1)[:, None]
-        start, end, control = p.straight_line()
+        return self.straight_guess(*self.problem.straight_line())
+
+    def straight_guess(self, start: np.ndarray, end: np.ndarray, control: np.ndarray) -> np.ndarray:
+        """``z`` with the states on the straight line from ``start`` to ``end`` (node by node), every control value at
+        ``control`` and the final time at its guess."""
+        p = self.problem
+        s = np.linspace(0.0, 1.0, self.N + 1)[:, None]
         values = np.tile(control, (self.control_values_per_axis(), 1))
         return self.assemble(start + s * (end - start), values, p.tf_guess if self.free_time else p.tf)
 
@@ -480,10 +489,10 @@ class Transcription:
             cones = (ConeBlock("cone_constraints", values, W_coo if jacobians else None, self.cone_sizes, "scaled"),)
         return Evaluation(residuals, residual_jacobian, inequalities, equalities, cones)
 
-    def symbolic_nlp(self) -> SymbolicNLP:
+    def symbolic_nlp(self, z: ca.SX | None = None) -> SymbolicNLP:
         """The program as one CasADi NLP (:class:`SymbolicNLP`): what an independent solver of the same problem (the
-        IPOPT reference, the benchmarks) reads."""
-        z = ca.SX.sym("z", self.num_variables)
+        IPOPT reference, the benchmarks) reads; ``z`` (default: new symbols) stands for the decision vector."""
+        z = ca.SX.sym("z", self.num_variables) if z is None else z
         objective = ca.dot(ca.DM(self.linear_cost()), z)
         if self.residual_weights().size:
             objective += ca.dot(ca.DM(self.residual_weights()), (ca.DM(self._energy_rows[0].toarray()) @ z) ** 2)

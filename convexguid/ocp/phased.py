@@ -1,0 +1,273 @@
+"""A maneuver in phases as one program for the SCP engine, and its dense check.
+
+Each phase is transcribed on its own (its method, grid, duration, margins); the decision vector is theirs end to
+end, :math:`z = [z_1, \\dots, z_P]`, and every block of the engine's interface is theirs side by side (block
+diagonal Jacobians, the phase's name before each block's). The links between phases are written on the phases'
+end values, which are entries of ``z`` (a state at a phase's first or last node, its final time): a link affine in
+them (the continuity of a state) is a hard row of :math:`Az = b`; any other is an equality the engine linearizes,
+divided by its magnitude (the change of its value when every entry it uses moves by its own scale, at the first
+guess), as the defects are in the states' scales.
+
+The dense check flies every phase from its own planned first node (:class:`~convexguid.ocp.check.DenseChecker`)
+and judges each link on the flown ends: a phase whose own check fails is repaired as a single problem would be
+(tightened or refined), and a link broken on the flown ends refines the phases whose end it uses, since the
+drift is theirs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from convexguid.ocp.check import FINAL_TOLERANCE, DenseChecker
+from convexguid.ocp.parts import SparsityPattern, SymbolicNLP
+from convexguid.ocp.transcription import Transcription
+from convexguid.scp.check_repair import Check, Repair
+from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+from convexguid.verification import Verification
+
+
+@dataclass(frozen=True)
+class Link:
+    """``expression == 0`` on the phases' end values (:meth:`~convexguid.ocp.problem.Problem.start`,
+    :meth:`~convexguid.ocp.problem.Problem.end`)."""
+
+    name: str
+    expression: ca.SX
+
+
+@dataclass(frozen=True)
+class Weights:
+    """One phase's share of the engine's multipliers (what :meth:`Transcription.lagrangian_hessian` reads)."""
+
+    equality: np.ndarray
+    inequality: np.ndarray
+
+
+def _shifted(matrix: sp.coo_matrix, column: int, width: int) -> sp.coo_matrix:
+    """``matrix`` placed at ``column`` of a ``width``-column matrix (the same entries, in the same order)."""
+    return sp.coo_matrix((matrix.data, (matrix.row, matrix.col + column)), shape=(matrix.shape[0], width))
+
+
+class PhasedProgram:
+    """The phases' transcriptions and their links as one :class:`~convexguid.scp.problem.NonconvexProgram`."""
+
+    def __init__(self, phases: list[Transcription], links: tuple[Link, ...], guess: np.ndarray | None = None):
+        self.phases = tuple(phases)
+        self.links = links
+        self.offsets = np.concatenate([[0], np.cumsum([t.num_variables for t in self.phases])]).astype(int)
+        self.num_variables = int(self.offsets[-1])
+        self._guess = guess
+        self._build_links()
+
+    def with_phases(self, phases: list[Transcription]) -> PhasedProgram:
+        """The same links on other transcriptions of the phases (a repair's)."""
+        return PhasedProgram(phases, self.links)
+
+    def pieces(self, z: np.ndarray) -> list[np.ndarray]:
+        """Each phase's part of ``z``."""
+        return [np.asarray(z[a:b]) for a, b in zip(self.offsets[:-1], self.offsets[1:], strict=True)]
+
+    def names(self) -> list[str]:
+        return [t.problem.name for t in self.phases]
+
+    # --- links --------------------------------------------------------------------------------------------------
+    def _reference_index(self, name: str) -> tuple[int, str, int]:
+        """``(phase, "start" or "end", state index or -1 for the duration)`` of an end reference's name."""
+        for i, t in enumerate(self.phases):
+            if name in t.problem.ends:
+                return (i, *t.problem.ends[name])
+        raise KeyError(name)
+
+    def _reference_in_z(self, z: ca.SX, name: str):
+        i, which, index = self._reference_index(name)
+        t, offset = self.phases[i], self.offsets[i]
+        if index < 0:
+            return z[offset + t.num_variables - 1] if t.free_time else ca.DM(t.problem.tf)
+        return z[offset + (0 if which == "start" else t.N) * t.nx + index]
+
+    def _build_links(self) -> None:
+        rows = ca.vertcat(*(ca.SX(link.expression) for link in self.links)) if self.links else ca.SX(0, 1)
+        self.link_names = [link.name for link in self.links for _ in range(ca.SX(link.expression).shape[0])]
+        references = ca.symvar(rows)
+        self._references = [str(r) for r in references]
+        z = ca.SX.sym("z", self.num_variables)
+        rows_in_z = ca.substitute(rows, ca.vertcat(*references), ca.vertcat(*(
+            self._reference_in_z(z, name) for name in self._references))) if references else rows
+        jacobian = ca.jacobian(rows_in_z, z)
+        affine = np.array([not ca.depends_on(jacobian[r, :], z) for r in range(rows.shape[0])], dtype=bool)
+        guess = self.initial_guess()
+        value, slope = (np.asarray(v, dtype=float) for v in ca.Function("links", [z], [rows_in_z, jacobian])(guess))
+        magnitude = np.abs(slope) @ self.variable_scale()
+        self.link_magnitudes = np.where(magnitude > 0, magnitude, 1.0)
+        # the affine links: hard rows A z = b (their value is slope z - b, exactly)
+        self._affine = (sp.coo_matrix(slope[affine]), slope[affine] @ guess - value.ravel()[affine])
+        nonlinear = rows_in_z[np.flatnonzero(~affine).tolist(), 0] / ca.DM(self.link_magnitudes[~affine])
+        self.nonlinear_rows = np.flatnonzero(~affine)
+        self._nonlinear = ca.Function("nonlinear_links", [z], [nonlinear, ca.jacobian(nonlinear, z)])
+        self._nonlinear_pattern = SparsityPattern(ca.jacobian(nonlinear, z).sparsity())
+        self._symbols = (z, nonlinear)
+        self._on_ends = ca.Function("links_on_ends", [ca.vertcat(*references)] if references else [ca.SX(0, 1)],
+                                    [rows / ca.DM(self.link_magnitudes)])
+
+    def link_errors(self, starts: list[np.ndarray], ends: list[np.ndarray], durations: list[float]) -> np.ndarray:
+        """Each link row's value, in its magnitude, on given phase ends (the flown ones in the dense check)."""
+        values = []
+        for name in self._references:
+            i, which, index = self._reference_index(name)
+            values.append(durations[i] if index < 0 else (starts if which == "start" else ends)[i][index])
+        return np.abs(np.asarray(self._on_ends(np.array(values)), dtype=float).ravel())
+
+    # --- NonconvexProgram ---------------------------------------------------------------------------------------
+    def initial_guess(self) -> np.ndarray:
+        if self._guess is not None:
+            return self._guess
+        return np.concatenate([t.initial_guess() for t in self.phases])
+
+    def variable_scale(self) -> np.ndarray:
+        return np.concatenate([t.variable_scale() for t in self.phases])
+
+    def residual_weights(self) -> np.ndarray:
+        return np.concatenate([t.residual_weights() for t in self.phases])
+
+    def linear_cost(self) -> np.ndarray:
+        return np.concatenate([t.linear_cost() for t in self.phases])
+
+    def linear_constraints(self) -> LinearConstraints:
+        parts = [t.linear_constraints() for t in self.phases]
+        A = sp.vstack([sp.block_diag([sp.coo_matrix(c.A) for c in parts]), self._affine[0]]).tocoo()
+        G = sp.block_diag([sp.coo_matrix(c.G) for c in parts]).tocoo()
+        return LinearConstraints(A, np.concatenate([*(c.b for c in parts), self._affine[1]]), G,
+                                 np.concatenate([c.h for c in parts]))
+
+    def output_constraints(self) -> OutputConstraints:
+        return OutputConstraints.none(self.residual_weights().size)
+
+    def evaluate(self, z: np.ndarray, jacobians: bool = True) -> Evaluation:
+        n = self.num_variables
+        residuals, residual_jacobians, inequalities, equalities, cones = [], [], [], [], []
+        for t, offset, piece in zip(self.phases, self.offsets, self.pieces(z), strict=False):
+            ev = t.evaluate(piece, jacobians)
+            residuals.append(ev.residuals)
+            if jacobians:
+                residual_jacobians.append(_shifted(sp.coo_matrix(ev.residual_jacobian), offset, n))
+            for blocks, out in ((ev.inequalities, inequalities), (ev.equalities, equalities)):
+                out += [ConstraintBlock(f"{t.problem.name}: {b.name}", b.values,
+                                        _shifted(b.jacobian, offset, n) if jacobians else None, b.unit) for b in blocks]
+            cones += [ConeBlock(f"{t.problem.name}: {c.name}", c.values,
+                                _shifted(c.jacobian, offset, n) if jacobians else None, c.sizes, c.unit)
+                      for c in ev.cones]
+        if self.nonlinear_rows.size:
+            value, jacobian = self._nonlinear(z)
+            equalities.append(ConstraintBlock("links", np.asarray(value, dtype=float).ravel(),
+                                              self._nonlinear_pattern.coo(jacobian) if jacobians else None))
+        residual_jacobian = (sp.vstack(residual_jacobians).tocoo() if residual_jacobians else None)
+        return Evaluation(np.concatenate(residuals), residual_jacobian, tuple(inequalities), tuple(equalities),
+                          tuple(cones))
+
+    @cached_property
+    def _row_counts(self) -> list[tuple[int, int]]:
+        """Each phase's equality and (nonlinear) inequality rows, in the order of :meth:`evaluate`."""
+        counts = []
+        for t, piece in zip(self.phases, self.pieces(self.initial_guess()), strict=True):
+            ev = t.evaluate(piece, jacobians=False)
+            counts.append((sum(b.values.size for b in ev.equalities), sum(b.values.size for b in ev.inequalities)))
+        return counts
+
+    @cached_property
+    def _link_hessian(self) -> tuple[ca.Function, SparsityPattern]:
+        z, rows = self._symbols
+        lam = ca.SX.sym("lam", rows.shape[0])
+        hessian = ca.hessian(ca.dot(lam, rows), z)[0]
+        return ca.Function("link_hessian", [z, lam], [hessian]), SparsityPattern(hessian.sparsity())
+
+    def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
+        """The phases' exact Lagrangian Hessians side by side, and the nonlinear links' curvature."""
+        blocks, equality, inequality = [], 0, 0
+        for t, piece, (m_eq, m_in) in zip(self.phases, self.pieces(z), self._row_counts, strict=True):
+            share = Weights(weights.equality[equality: equality + m_eq],
+                            weights.inequality[inequality: inequality + m_in])
+            blocks.append(t.lagrangian_hessian(piece, share))
+            equality, inequality = equality + m_eq, inequality + m_in
+        hessian = sp.block_diag(blocks).tocsr()
+        if self.nonlinear_rows.size:
+            function, pattern = self._link_hessian
+            hessian = hessian + pattern.coo(function(z, weights.equality[equality:])).tocsr()
+        return hessian
+
+    def symbolic_nlp(self) -> SymbolicNLP:
+        """Every phase's NLP on its part of one decision vector, and the links (the IPOPT reference reads it)."""
+        z = ca.SX.sym("z", self.num_variables)
+        objective, blocks = 0, []
+        for t, a, b in zip(self.phases, self.offsets[:-1], self.offsets[1:], strict=True):
+            nlp = t.symbolic_nlp(z[int(a): int(b)])
+            objective += nlp.objective
+            blocks += [(f"{t.problem.name}: {name}", e, lower, upper) for name, e, lower, upper in nlp.blocks]
+        A, b = self._affine
+        own_z, nonlinear = self._symbols
+        blocks += [("links", ca.substitute(nonlinear, own_z, z), 0.0, 0.0),
+                   ("linear_links", ca.DM(A.toarray()) @ z - b, 0.0, 0.0)]
+        return SymbolicNLP(z, objective, tuple(blocks))
+
+
+@dataclass(frozen=True)
+class PhasedTrack:
+    """The dense check of every phase (its verification and track), in order."""
+
+    phases: tuple[Check, ...]
+
+
+class PhasedChecker:
+    """:class:`~convexguid.scp.check_repair.PlanChecker` of a :class:`PhasedProgram`."""
+
+    def __init__(self, points: int = 20) -> None:
+        self.single = DenseChecker(points)
+
+    def check(self, program: PhasedProgram, z: np.ndarray) -> Check:
+        checks = tuple(self.single.check(t, piece) for t, piece in zip(program.phases, program.pieces(z),
+                                                                        strict=True))
+        names = program.names()
+        tracks = [c.track for c in checks]
+        errors = program.link_errors([tr.x[0] for tr in tracks], [tr.x[-1] for tr in tracks],
+                                     [float(tr.t[-1]) for tr in tracks])
+        final_errors = {f"{name}.{key}": value for name, c in zip(names, checks, strict=True)
+                        for key, value in c.verification.final_errors.items()}
+        for label, error in zip(program.link_names, errors, strict=True):
+            final_errors[f"link_{label}_error"] = max(final_errors.get(f"link_{label}_error", 0.0), float(error))
+        constraint_checks = tuple(type(k)(f"{name}.{k.name}", k.worst, k.bound, k.sense)
+                                  for name, c in zip(names, checks, strict=True) for k in c.verification.checks)
+        worst = max(final_errors.values(), default=0.0)
+        passed = all(c.verification.passed for c in checks) and float(errors.max(initial=0.0)) <= FINAL_TOLERANCE
+        remarks = tuple(f"{name}: {r}" for name, c in zip(names, checks, strict=True) for r in c.verification.remarks)
+        verification = Verification(sum(c.verification.grid_points for c in checks), constraint_checks, worst,
+                                    final_errors, passed, checks[0].verification.tolerances, remarks)
+        return Check(verification, PhasedTrack(checks))
+
+    def repair(self, program: PhasedProgram, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
+        """Repair each phase whose own check failed as a single problem's; refine each phase whose end a link
+        broken on the flown ends uses. None when any of them has no repair left."""
+        checks = check.track.phases
+        to_refine = set()
+        tracks = [c.track for c in checks]
+        errors = program.link_errors([tr.x[0] for tr in tracks], [tr.x[-1] for tr in tracks],
+                                     [float(tr.t[-1]) for tr in tracks])
+        for link in program.links:
+            rows = [r for r, label in enumerate(program.link_names) if label == link.name]
+            if errors[rows].max(initial=0.0) > FINAL_TOLERANCE:
+                to_refine |= {program._reference_index(str(s))[0] for s in ca.symvar(ca.SX(link.expression))
+                              if program._reference_index(str(s))[1] == "end"}
+        phases, starts, notes = list(program.phases), program.pieces(z), []
+        for i, (t, piece, c) in enumerate(zip(program.phases, starts, checks, strict=True)):
+            if c.verification.passed and i not in to_refine:
+                continue
+            repair = self.single.repair(t, piece, c, attempt) if not c.verification.passed else \
+                self.single.refine(t, piece, c)
+            if repair is None:
+                return None
+            phases[i], starts[i] = repair.program, repair.x0
+            notes.append(f"{t.problem.name}: {repair.description}")
+        return Repair(program.with_phases(phases), np.concatenate(starts), "; ".join(notes))
