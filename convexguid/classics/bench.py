@@ -1,7 +1,8 @@
 """The classics benchmark: published optimal-control problems stated from their papers, solved as a new user would.
 
-Each module of ``examples/classics/`` (and each example beside it that gives a published figure) states one problem
-with :class:`convexguid.ocp.Problem` (straight-line guess, default settings) and gives the published figure it must
+Each module of ``examples/classics/`` (and each example beside it or in ``examples/phases/`` that gives a published
+figure) states one problem with :class:`convexguid.ocp.Problem` or, in phases, :class:`convexguid.ocp.Phases`
+(straight-line guess, default settings) and gives the published figure it must
 reach: ``PUBLISHED``, ``SOURCE``, ``FIGURE`` and, unless the figure is the final time,
 ``figure(final_state, final_time)`` computing it from the final state's values by name. For each, in one run on
 this machine:
@@ -76,7 +77,8 @@ def problem_modules(folder: Path = FOLDER, only: list[str] | None = None) -> lis
     """The problem modules of ``folder`` and the examples beside it that give a ``PUBLISHED`` figure (by file
     name, ``only`` some), loaded."""
     modules = []
-    examples = [path for path in sorted(folder.parent.glob("*.py")) if "\nPUBLISHED = " in path.read_text()]
+    examples = [path for path in sorted(folder.parent.glob("*.py")) + sorted(folder.parent.glob("phases/*.py"))
+                if "\nPUBLISHED = " in path.read_text()]
     for path in sorted(folder.glob("*.py")) + examples:
         if path.stem.startswith("_") or (only and path.stem not in only):
             continue
@@ -85,10 +87,6 @@ def problem_modules(folder: Path = FOLDER, only: list[str] | None = None) -> lis
         spec.loader.exec_module(module)
         modules.append(module)
     return modules
-
-
-def final_values(names: list[str], states) -> dict[str, float]:
-    return {name: float(value) for name, value in zip(names, states, strict=True)}
 
 
 def published_figure(module: ModuleType, final_state: dict[str, float], final_time: float) -> float:
@@ -109,14 +107,16 @@ def run_problem(module: ModuleType) -> Row:
     names = list(solution.figures.states)
     ours = published_figure(module, {n: float(solution.nodes.columns[n][-1]) for n in names},
                             solution.figures.final_time_s)
-    first = module.build()
-    program = transcribe(first)
+    program = transcribe(module.build())
     with single_threaded():
         answer = solve_with_ipopt(program)
-    theirs = published_figure(module, final_values([v.name for v in first.states], program.states(answer.z)[-1]),
-                              program.final_time(answer.z)) if answer.success else math.nan
-    final_intervals = len(solution.nodes.t) - 1
-    intervals = str(program.N) if final_intervals == program.N else f"{program.N} -> {final_intervals}"
+    theirs = published_figure(module, program.final_values(answer.z), program.final_time(answer.z)) \
+        if answer.success else math.nan
+    phases = getattr(program, "phases", (program,))
+    first_intervals = sum(t.N for t in phases)
+    final_intervals = len(solution.nodes.t) - len(phases)
+    intervals = str(first_intervals) if final_intervals == first_intervals else \
+        f"{first_intervals} -> {final_intervals}"
     return Row(name, float(module.PUBLISHED), module.SOURCE, module.FIGURE, solution.status,
                bool(solution.verification is not None and solution.verification.passed), ours, solution.iterations,
                intervals, elapsed, answer.status, theirs, answer.iterations, answer.setup_s, answer.solve_s)

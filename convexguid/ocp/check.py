@@ -5,12 +5,12 @@ node; a zero- or first-order hold), held within the control's bounds (what the a
 :func:`scipy.integrate.solve_ivp` (DOP853, rtol 1e-10) integrates the dynamics interval by interval from the given
 initial state; on a grid of ``points`` samples per interval the path constraints and the state bounds are
 evaluated (a path equality in its magnitude), and at the end the propagated state is compared with the stated
-final values (scaled by each state's scale). A broken path constraint or state bound is repaired by tightening it on the intervals where it broke
-(:func:`~convexguid.scp.check_repair.grown_margin`) and re-solving warm. An error the grid makes (a final-state
-error, a violation the tightening stopped reducing, a broken path equality) is repaired by refining it: a
-Hermite-Simpson program splits the intervals whose local error exceeds its tolerance, where the dense check broke a
-constraint and where a control chatters (:mod:`convexguid.ocp.mesh`, Betts 2010, Sec. 4.7); the others double
-every interval.
+final values (scaled by each state's scale). A broken path constraint or state bound is repaired by tightening it
+on the intervals where it broke (:func:`~convexguid.scp.check_repair.grown_margin`) and re-solving warm. An error
+the grid makes (a final-state error, a violation the tightening stopped reducing, a broken path equality) is
+repaired by refining it: a Hermite-Simpson program splits the intervals whose local error exceeds its tolerance,
+where the dense check broke a constraint and where a control chatters (:mod:`convexguid.ocp.mesh`, Betts 2010,
+Sec. 4.7); the others double every interval.
 """
 
 from __future__ import annotations
@@ -33,6 +33,10 @@ FINAL_TOLERANCE = 1e-4
 
 PATH_TOLERANCE = 1e-6
 """Largest excess over a path constraint or a state bound on the dense grid (the constraint's own unit)."""
+
+EQUALITY_TOLERANCE = FINAL_TOLERANCE
+"""Largest error of a path equality on the dense grid, in its magnitude: an equality cannot be held with a margin,
+so between nodes it drifts as the final state does, and is judged as the final state is."""
 
 MARGIN_FLOOR = 1e-6
 """Smallest tightening a repair adds to the path constraints."""
@@ -92,6 +96,7 @@ class DenseChecker:
         p = program.problem
         track = self.propagate(program, z)
         excess = self._excess(program, track)
+        broken = any(np.any(e > self._tolerance(p, key)) for key, e in excess.items())
         checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()), 0.0, "max")
                   for j, c in enumerate(p.constraints)]
         for i, v in enumerate(p.states):
@@ -103,9 +108,10 @@ class DenseChecker:
                         for i, v in enumerate(p.states) if v.final is not None}
         final_errors |= boundary_errors(program, track.x, float(track.t[-1]))
         worst_final = max(final_errors.values(), default=0.0)
-        passed = worst_final <= FINAL_TOLERANCE and all(c.violation <= PATH_TOLERANCE for c in checks)
+        passed = worst_final <= FINAL_TOLERANCE and not broken
         verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed,
-                                    {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE},
+                                    {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE,
+                                     "path_equality": EQUALITY_TOLERANCE},
                                     () if passed else jumping_controls(program, z))
         return Check(verification, track)
 
@@ -116,21 +122,23 @@ class DenseChecker:
         last tightening left the worst violation above 90% of what it was, or for a broken path equality, the grid
         is refined instead (:meth:`refine`; None past :data:`MAX_INTERVALS`: the plan is ``unverified`` at once
         instead of after the whole repair budget)."""
-        worst_now = check.verification.max_violation
+        p, track = program.problem, check.track
+        excess_by_name = self._excess(program, track)
+        worst_now = max((float(e.max()) for key, e in excess_by_name.items()
+                         if self._tolerance(p, key) == PATH_TOLERANCE), default=0.0)
         if worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation:
             # nothing broken between nodes, or the last tightening did not reduce it: the grid is too coarse
             return self.refine(program, z, check)
-        p, track, N = program.problem, check.track, program.N
+        N = program.N
         node_times = program.final_time(z) * program.node_shares()
         interval = np.clip(np.searchsorted(node_times, track.t, side="right") - 1, 0, N - 1)
         path, bounds, cone = program.margins.path.copy(), program.margins.bounds.copy(), program.margins.cone.copy()
         nx = program.nx
         pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
-        excess_by_name = self._excess(program, track)
         broken_equality = False
         for name, excess in excess_by_name.items():
             if name[0] == "path" and p.constraints[name[1]].equality:
-                broken_equality |= bool(np.any(excess > PATH_TOLERANCE))
+                broken_equality |= bool(np.any(excess > EQUALITY_TOLERANCE))
                 continue  # an equality cannot be tightened: only a finer grid helps
             for k in np.unique(interval[excess > PATH_TOLERANCE]):
                 worst = float(excess[interval == k].max())
@@ -179,9 +187,14 @@ class DenseChecker:
         interval = np.clip(np.searchsorted(track.t[-1] * program.node_shares(), track.t, side="right") - 1, 0,
                            program.N - 1)
         broken = np.zeros(program.N, dtype=bool)
-        for excess in self._excess(program, track).values():
-            broken[interval[excess > PATH_TOLERANCE]] = True
+        for key, excess in self._excess(program, track).items():
+            broken[interval[excess > self._tolerance(program.problem, key)]] = True
         return broken
+
+    @staticmethod
+    def _tolerance(problem, key: tuple) -> float:
+        """The tolerance of one entry of :meth:`_excess`: a path equality's, or a constraint's and a bound's."""
+        return EQUALITY_TOLERANCE if key[0] == "path" and problem.constraints[key[1]].equality else PATH_TOLERANCE
 
     @staticmethod
     def _equality_magnitudes(program: Transcription, track: DenseTrack) -> dict[int, float]:

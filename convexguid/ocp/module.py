@@ -1,4 +1,5 @@
-"""A problem module: a Python file whose ``build(...)`` returns a :class:`~convexguid.ocp.problem.Problem`.
+"""A problem module: a Python file whose ``build(...)`` returns a :class:`~convexguid.ocp.problem.Problem` (or a
+maneuver in phases, :class:`~convexguid.ocp.phases.Phases`).
 
 ``convexguid solve my_problem.py --set name=value`` runs it: each ``--set`` sets one parameter of ``build`` (the
 value read as YAML, as for problem files); a name ``build`` does not declare, a module without ``build`` or a
@@ -16,6 +17,7 @@ from pathlib import Path
 import yaml
 
 from convexguid.errors import SpecError
+from convexguid.ocp.phases import Phases
 from convexguid.ocp.problem import Problem
 
 
@@ -24,7 +26,7 @@ def module_parameters(path: str | Path) -> dict[str, object]:
     return {name: p.default for name, p in inspect.signature(_build_function(Path(path))).parameters.items()}
 
 
-def load_module_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem:
+def load_module_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem | Phases:
     """The problem ``build(**parameters)`` of the module at ``path`` returns, ``overrides`` setting parameters."""
     path = Path(path)
     build = _build_function(path)
@@ -46,8 +48,9 @@ def load_module_problem(path: str | Path, overrides: Sequence[str] = ()) -> Prob
         raise
     except Exception as exc:  # noqa: BLE001 - the user's module: one line, not a traceback
         raise SpecError(f"{path}: build() raised {type(exc).__name__}: {exc}") from None
-    if not isinstance(problem, Problem):
-        raise SpecError(f"{path}: build() returned {type(problem).__name__}; it must return a convexguid.ocp.Problem")
+    if not isinstance(problem, (Problem, Phases)):
+        raise SpecError(f"{path}: build() returned {type(problem).__name__}; it must return a convexguid.ocp.Problem "
+                        "or convexguid.ocp.Phases")
     try:
         problem.check()
     except SpecError as exc:

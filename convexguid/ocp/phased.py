@@ -75,6 +75,14 @@ class PhasedProgram:
     def names(self) -> list[str]:
         return [t.problem.name for t in self.phases]
 
+    def final_time(self, z: np.ndarray) -> float:
+        """The maneuver's duration: the phases' durations added."""
+        return sum(t.final_time(piece) for t, piece in zip(self.phases, self.pieces(z), strict=True))
+
+    def final_values(self, z: np.ndarray) -> dict[str, float]:
+        """The last phase's last node's states by name."""
+        return self.phases[-1].final_values(self.pieces(z)[-1])
+
     # --- links --------------------------------------------------------------------------------------------------
     def _reference_index(self, name: str) -> tuple[int, str, int]:
         """``(phase, "start" or "end", state index or -1 for the duration)`` of an end reference's name."""

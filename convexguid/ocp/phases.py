@@ -146,6 +146,5 @@ class Phases:
         each row's phase, its index from 0)."""
         from convexguid.ocp.solve import solve_phases  # the SCP engine and SciPy load at the first solve
 
-        self.check()
         started = time.perf_counter()
         return solve_phases(self, started, max_iterations, verification_points, log)

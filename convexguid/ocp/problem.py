@@ -67,6 +67,8 @@ class PathConstraint:
     """``expression == 0`` instead (a path equality: linearized like the inequalities, never tightened)."""
     at_nodes: bool = True
     """False: imposed between the nodes only (Hermite-Simpson's midpoints), for a bound the nodes hold hard."""
+    at_midpoints: bool = True
+    """False: imposed at the nodes only (a path equality of the states alone, see :meth:`Problem.path_equality`)."""
     cone: tuple[ca.SX, ca.SX] | None = None
     """For a second-order cone ``||vector|| <= bound``: ``(bound, vector)``, affine in states and controls (kept
     exact in every subproblem); ``expression`` is then ``||vector|| - bound``, what the dense check evaluates."""
@@ -75,7 +77,7 @@ class PathConstraint:
         """Whether the constraint is imposed at the point ``share`` of the maneuver (a node or a midpoint)."""
         if self.at is not None:
             return node and abs(share - self.at) < 1e-9
-        if node and not self.at_nodes:
+        if (node and not self.at_nodes) or (not node and not self.at_midpoints):
             return False
         return self.during[0] - 1e-12 <= share <= self.during[1] + 1e-12
 
@@ -241,9 +243,12 @@ class Problem:
         """``expression == 0`` along the trajectory (or the share ``during`` of it), e.g. a thrust of fixed
         magnitude; nonconvex allowed (the engine linearizes it). The dense check judges ``|expression|`` between
         the nodes in its magnitude (its largest change on the flown track when every state and control moves by
-        its own scale); where it breaks there the repair refines the grid (an equality cannot be tightened)."""
+        its own scale); where it breaks there the repair refines the grid (an equality cannot be tightened). An
+        equality of the states alone (a singular arc's condition) holds at the nodes: at Hermite-Simpson's
+        midpoints too it would fix more values than the collocation leaves free."""
         self.path_constraint(name, expression, unit, during)
-        self.constraints[-1] = replace(self.constraints[-1], equality=True)
+        state_only = not ca.depends_on(self.constraints[-1].expression, self.control_vector())
+        self.constraints[-1] = replace(self.constraints[-1], equality=True, at_midpoints=not state_only)
 
     def cone_constraint(self, name: str, vector, bound, unit: str = "",
                         during: tuple[float, float] | None = None) -> None:

@@ -14,6 +14,7 @@ from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.hold import FirstOrderHoldProgram, ZeroOrderHoldProgram
 from convexguid.ocp.phased import Link, PhasedChecker, PhasedProgram
+from convexguid.ocp.phases import Phases
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import solve_verified
 from convexguid.scp.engine import Log
@@ -22,7 +23,6 @@ from convexguid.solution import Figures, Solution, Trajectory, optional, planned
 from convexguid.threads import single_threaded
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
-    from convexguid.ocp.phases import Phases
     from convexguid.ocp.problem import Problem
 
 
@@ -55,8 +55,13 @@ TRANSCRIPTIONS = {program.method: program
 """Every transcription by the name :meth:`~convexguid.ocp.problem.Problem.transcription` takes."""
 
 
-def transcribe(problem: Problem) -> Transcription:
-    """The problem transcribed as it says (Hermite-Simpson unless it chose a hold)."""
+def transcribe(problem: Problem | Phases) -> Transcription | PhasedProgram:
+    """The problem transcribed as it says (Hermite-Simpson unless it chose another method); a maneuver in phases
+    as every phase says, with its links and its first guess (:meth:`~convexguid.ocp.phases.Phases.guess`)."""
+    if isinstance(problem, Phases):
+        problem.check()
+        programs = [transcribe(p) for p in problem.phases]
+        return PhasedProgram(programs, tuple(Link(name, e) for name, e in problem.links), problem.guess(programs))
     return TRANSCRIPTIONS[problem.method](problem)
 
 
@@ -137,9 +142,7 @@ def solve_phases(statement: Phases, started: float, max_iterations: int = 300, v
                  log: Log | None = None) -> Solution:
     """Plan a maneuver in phases (:class:`~convexguid.ocp.phases.Phases`): every phase transcribed as it says, the
     links, the engine's check-repair loop with every phase checked densely, one solution over the whole maneuver."""
-    programs = [transcribe(p) for p in statement.phases]
-    links = tuple(Link(name, expression) for name, expression in statement.links)
-    program = PhasedProgram(programs, links, statement.guess(programs))
+    program = transcribe(statement)
     with single_threaded():
         outcome = solve_verified(program, _settings([p.objective for p in statement.phases], max_iterations),
                                  PhasedChecker(verification_points), log)

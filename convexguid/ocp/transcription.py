@@ -170,6 +170,10 @@ class Transcription:
     def final_time(self, z: np.ndarray) -> float:
         return float(z[-1]) if self.free_time else float(self.problem.tf)
 
+    def final_values(self, z: np.ndarray) -> dict[str, float]:
+        """The last node's states by name."""
+        return {v.name: float(value) for v, value in zip(self.problem.states, self.states(z)[-1], strict=True)}
+
     def assemble(self, states: np.ndarray, values: np.ndarray, tf: float) -> np.ndarray:
         """``z`` from node states ``(N + 1, nx)``, control values ``(C, nu)`` and the final time (fuel slacks at the
         values' magnitudes, the epigraph at their integral)."""

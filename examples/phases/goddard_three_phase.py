@@ -18,6 +18,7 @@ Run: python examples/phases/goddard_three_phase.py
 """
 
 import casadi as ca
+import numpy as np
 
 from convexguid.ocp import Phases, Problem
 
@@ -27,6 +28,10 @@ FIGURE = "final altitude h(tf) [ft]"
 
 T_M, G, SIGMA, C, H_0 = 193.044, 32.174, 5.49153484923381010e-05, 1580.9425279876559, 23800.0
 M_0, M_F = 3.0, 1.0
+
+
+def figure(final_state: dict[str, float], final_time: float) -> float:
+    return final_state["h"]
 
 
 def drag(h, v):
@@ -58,6 +63,12 @@ def build(intervals: int = 20) -> Phases:
     coast, (h_end, _, _) = phase("coast", (0.0, 0.0), intervals, final={"m": M_F})
     singular.path_equality("singular_arc", m * G - (1 + v / C) * drag(h, v), unit="lbf")
     coast.minimize_terminal(-h_end)
+    for k, p in enumerate((boost, singular, coast)):
+        # a guess as the published solutions start (every phase 15 s, 6000 ft a phase, mass burnt evenly): the
+        # straight line knows no altitude beyond h(0) = 0
+        share = np.linspace(0.0, 1.0, intervals + 1)[:, None]
+        start, end = np.array([6000.0 * k, 500.0, M_0 - 2 / 3 * k]), np.array([6000.0 * (k + 1), 500.0, M_0 - 2 / 3 * (k + 1)])
+        p.initial_guess(start + share * (end - start), np.full((intervals + 1, len(p.controls)), T_M * (2 - k) / 2))
     flight = Phases("goddard-three-phase", [boost, singular, coast])
     flight.connect(boost, singular)
     flight.connect(singular, coast)

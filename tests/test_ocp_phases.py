@@ -1,0 +1,111 @@
+"""Maneuvers in phases (convexguid.ocp.Phases): analytic answers, two published multi-phase problems against their
+published figures and IPOPT on the same transcription, and statements refused with one line."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from convexguid.errors import SpecError
+from convexguid.ocp import Phases, Problem
+from convexguid.ocp.reference import solve_with_ipopt
+from convexguid.ocp.solve import transcribe
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "phases"
+
+
+def _example(name: str):
+    spec = importlib.util.spec_from_file_location(f"phases_{name}", EXAMPLES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _leg(name: str, start: float | None = None, end: float | None = None) -> tuple[Problem, object]:
+    """A double integrator from rest to rest in 1 s, least control energy (its position's ends as given)."""
+    p = Problem(name)
+    x = p.state("x", initial=start, final=end, scale=2.0)
+    v = p.state("v", initial=0.0, final=0.0, scale=2.0)
+    u = p.control("u", scale=10.0)
+    p.dynamics({x: v, v: u})
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(10)
+    return p, x
+
+
+def _hold_point(link_square: float | None = None) -> Phases:
+    first, x1 = _leg("to_hold", start=0.0)
+    second, _ = _leg("from_hold", end=2.0)
+    plan = Phases("hold-point", [first, second])
+    plan.connect(first, second, ["x"])
+    if link_square is not None:
+        plan.link("hold_at", first.end(x1) ** 2 - link_square)
+    return plan
+
+
+def test_a_hold_point_between_two_legs_is_where_the_energy_is_least():
+    """Rest to rest over d in T costs integral u^2 = 12 d^2 / T^3; two legs of 1 s with the hold point free stop
+    halfway (12 + 12 = 24). Stated by a nonlinear link, x_hold^2 = 2.25, the hold is at 1.5: 12 (1.5^2 + 0.5^2) = 30.
+    Hermite-Simpson is exact for these cubic paths."""
+    free = _hold_point().solve()
+    assert free.status == "converged", free.message
+    assert free.objective == pytest.approx(24.0, rel=1e-7)
+    held = _hold_point(2.25).solve()
+    assert held.status == "converged", held.message
+    assert held.objective == pytest.approx(30.0, rel=1e-7)
+    nodes = held.nodes
+    first_leg = nodes.columns["phase"] == 0
+    assert nodes.columns["x"][first_leg][-1] == pytest.approx(1.5, abs=1e-8)
+    assert nodes.t[-1] == pytest.approx(2.0) and held.figures.final_time_s == pytest.approx(2.0)
+    assert held.figures.phases["from_hold"]["start_s"] == pytest.approx(1.0)
+    assert held.verification.passed and "link_hold_at_error" in held.verification.final_errors
+
+
+def test_two_burn_orbit_raise_matches_dymos_and_ipopt_on_the_same_transcription():
+    """Burn, coast (no control), burn: Dymos' documented delta-v 0.3995 (its tests allow 2e-3); IPOPT on the same
+    three-phase program from the same guess reaches the same optimum."""
+    module = _example("two_burn_orbit_raise")
+    solution = module.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    deltav = solution.nodes.columns["deltav"][-1]
+    assert deltav == pytest.approx(module.PUBLISHED, rel=1e-3)
+    answer = solve_with_ipopt(transcribe(module.build()))
+    assert answer.success
+    assert deltav == pytest.approx(answer.objective, rel=1e-6)
+    # the coast has neither the engine's states nor a control: NaN in its rows of the joined table
+    coast = solution.nodes.columns["phase"] == 1
+    columns = solution.nodes.columns
+    assert np.isnan(columns["u"][coast]).all() and np.isnan(columns["deltav"][coast]).all()
+    durations = [solution.figures.phases[name]["duration_s"] for name in ("burn1", "coast", "burn2")]
+    assert sum(durations) == pytest.approx(solution.figures.final_time_s)
+
+
+def test_goddard_rocket_in_three_phases_reaches_betts_altitude():
+    """Boost, singular arc (its state equality at the nodes), coast: Betts' 18550.872 ft within 0.1%."""
+    module = _example("goddard_three_phase")
+    solution = module.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert solution.nodes.columns["h"][-1] == pytest.approx(module.PUBLISHED, rel=1e-3)
+
+
+def test_a_statement_in_phases_is_refused_with_one_line():
+    first, _ = _leg("a", start=0.0)
+    second, _ = _leg("b", end=1.0)
+    with pytest.raises(SpecError, match=r"every phase needs its own name"):
+        Phases("twins", [first, _leg("a")[0]])
+    plan = Phases("pair", [first, second])
+    with pytest.raises(SpecError, match=r"states speed are not states of both phases"):
+        plan.connect(first, second, ["speed"])
+    with pytest.raises(SpecError, match=r"the second phase must come later"):
+        plan.connect(second, first)
+    stray = Problem("other").state("y")
+    with pytest.raises(SpecError, match=r"link 'bad': uses y; a link is stated on phase ends"):
+        plan.link("bad", stray)
+    with pytest.raises(SpecError, match=r"a: start\(t\): expected a state of this problem"):
+        first.start(first.time)
+    lonely, _ = _leg("c", start=0.0, end=1.0)
+    lonely.objective = None
+    with pytest.raises(SpecError, match=r"alone: objective: no phase states one"):
+        Phases("alone", [lonely]).solve()
