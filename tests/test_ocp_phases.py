@@ -109,3 +109,25 @@ def test_a_statement_in_phases_is_refused_with_one_line():
     lonely.objective = None
     with pytest.raises(SpecError, match=r"alone: objective: no phase states one"):
         Phases("alone", [lonely]).solve()
+
+
+def test_a_campaign_runs_a_maneuver_in_phases(tmp_path):
+    """problems/campaigns/two_burn_orbit_raise_vs_radius.yaml on two of its radii: each row the three-phase plan a
+    direct solve of the module gives, and a farther orbit costs more delta-v."""
+    import pyarrow.parquet as pq
+    import yaml
+
+    from convexguid.campaign.run import run_campaign
+
+    source = Path(__file__).resolve().parents[1] / "problems" / "campaigns" / "two_burn_orbit_raise_vs_radius.yaml"
+    data = yaml.safe_load(source.read_text())
+    data["problem"] = str(EXAMPLES / "two_burn_orbit_raise.py")
+    data["grid"][0]["values"] = [2.0, 3.0]
+    path = tmp_path / "campaign.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    result = run_campaign(path, tmp_path / "out", serial=True)
+    rows = pq.read_table(result.table).to_pylist()
+    assert result.ok and [r["status"] for r in rows] == ["converged", "converged"]
+    direct = _example("two_burn_orbit_raise").build(r_target=3.0).solve()
+    assert rows[1]["objective"] == pytest.approx(direct.objective, rel=1e-9)
+    assert rows[0]["objective"] < rows[1]["objective"]

@@ -67,8 +67,9 @@ def build(intervals: int = 20) -> Phases:
         # a guess as the published solutions start (every phase 15 s, 6000 ft a phase, mass burnt evenly): the
         # straight line knows no altitude beyond h(0) = 0
         share = np.linspace(0.0, 1.0, intervals + 1)[:, None]
-        start, end = np.array([6000.0 * k, 500.0, M_0 - 2 / 3 * k]), np.array([6000.0 * (k + 1), 500.0, M_0 - 2 / 3 * (k + 1)])
-        p.initial_guess(start + share * (end - start), np.full((intervals + 1, len(p.controls)), T_M * (2 - k) / 2))
+        h, m = 6000.0 * (k + share), M_0 - 2 / 3 * (k + share)
+        p.initial_guess(np.hstack([h, np.full_like(h, 500.0), m]),
+                        np.full((intervals + 1, len(p.controls)), T_M * (2 - k) / 2))
     flight = Phases("goddard-three-phase", [boost, singular, coast])
     flight.connect(boost, singular)
     flight.connect(singular, coast)

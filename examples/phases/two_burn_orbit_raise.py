@@ -47,7 +47,8 @@ def orbit(p: Problem, initial: dict | None = None, final: dict | None = None):
     return (r, theta, vr, vt), rates
 
 
-def burn(name: str, angle_bounds, intervals: int, initial: dict | None = None, final: dict | None = None):
+def burn(name: str, angle_bounds, intervals: int, exhaust_speed: float, initial: dict | None = None,
+         final: dict | None = None):
     """A burn arc: the orbit, the thrust acceleration and delta-v as states, the thrust angle as the control."""
     p = Problem(name)
     (r, theta, vr, vt), rates = orbit(p, initial, final)
@@ -58,22 +59,25 @@ def burn(name: str, angle_bounds, intervals: int, initial: dict | None = None, f
          else p.control("u", period=2 * math.pi, unit="rad"))
     rates[vr] += accel * ca.sin(u)
     rates[vt] += accel * ca.cos(u)
-    p.dynamics({**rates, accel: accel**2 / EXHAUST_SPEED, deltav: accel})
+    p.dynamics({**rates, accel: accel**2 / exhaust_speed, deltav: accel})
     p.final_time(bounds=(0.5, 10.0), guess=2.0)
     p.transcription(intervals)
     return p, deltav
 
 
-def build(intervals: int = 20) -> Phases:
+def build(intervals: int = 20, r_target: float = R_TARGET, exhaust_speed: float = EXHAUST_SPEED) -> Phases:
+    """The transfer to a circular orbit of radius ``r_target`` with the engine's ``exhaust_speed`` (the published
+    case: 3 and 1.5)."""
     limit = math.radians(30.0)
-    burn1, _ = burn("burn1", (-limit, limit), intervals,
+    burn1, _ = burn("burn1", (-limit, limit), intervals, exhaust_speed,
                     initial={"r": 1.0, "theta": 0.0, "vr": 0.0, "vt": 1.0, "accel": 0.1, "deltav": 0.0})
     coast = Problem("coast")
     _, rates = orbit(coast)
     coast.dynamics(rates)
     coast.final_time(bounds=(0.5, 50.0), guess=3.0)
     coast.transcription(intervals)
-    burn2, deltav = burn("burn2", None, intervals, final={"r": R_TARGET, "vr": 0.0, "vt": math.sqrt(1 / R_TARGET)})
+    burn2, deltav = burn("burn2", None, intervals, exhaust_speed,
+                         final={"r": r_target, "vr": 0.0, "vt": math.sqrt(1 / r_target)})
     burn2.minimize_terminal(deltav)
     transfer = Phases("two-burn-orbit-raise", [burn1, coast, burn2])
     transfer.connect(burn1, coast)
