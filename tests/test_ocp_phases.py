@@ -4,6 +4,7 @@ published figures and IPOPT on the same transcription, and statements refused wi
 import importlib.util
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -105,6 +106,11 @@ def test_a_statement_in_phases_is_refused_with_one_line():
         plan.link("bad", stray)
     with pytest.raises(SpecError, match=r"a: start\(t\): expected a state of this problem"):
         first.start(first.time)
+    unflowed, _ = _leg("d", start=0.0, end=1.0)
+    unflowed.transcription(1, "flow")
+    with pytest.raises(SpecError, match=r"d: transcription: method 'flow' needs the flow of every state; none given "
+                                        r"for x, v"):
+        unflowed.check()
     lonely, _ = _leg("c", start=0.0, end=1.0)
     lonely.objective = None
     with pytest.raises(SpecError, match=r"alone: objective: no phase states one"):
@@ -131,3 +137,52 @@ def test_a_campaign_runs_a_maneuver_in_phases(tmp_path):
     direct = _example("two_burn_orbit_raise").build(r_target=3.0).solve()
     assert rows[1]["objective"] == pytest.approx(direct.objective, rel=1e-9)
     assert rows[0]["objective"] < rows[1]["objective"]
+
+
+def _cw_phase(name: str, duration: float, method: str, intervals: int, thrust: bool, ends: dict, sign: float = 1.0):
+    """A planar Clohessy-Wiltshire phase (mean motion 0.0011 rad/s) with its flow in closed form (the state
+    transition matrix; ``sign`` -1 spoils one entry); thrust: a box of 0.05 m/s^2 per axis, least fuel."""
+    n = 0.0011
+    p = Problem(name)
+    x, y, vx, vy = (p.state(k, initial=ends.get(("initial", k)), final=ends.get(("final", k)),
+                            scale=1000.0 if k in "xy" else 2.0) for k in ("x", "y", "vx", "vy"))
+    rates = {x: vx, y: vy, vx: 3 * n**2 * x + 2 * n * vy, vy: -2 * n * vx}
+    if thrust:
+        ux, uy = p.control("ux", bounds=(-0.05, 0.05)), p.control("uy", bounds=(-0.05, 0.05))
+        rates[vx], rates[vy] = rates[vx] + ux, rates[vy] + uy
+        p.minimize_fuel()
+    p.dynamics(rates)
+    c, s, t = ca.cos(n * p.time), ca.sin(n * p.time), p.time
+    p.flow({x: (4 - 3 * c) * x + s / n * vx + 2 * (1 - c) / n * vy,
+            y: 6 * (s - n * t) * x + y - 2 * (1 - c) / n * vx + (4 * s - 3 * n * t) / n * vy,
+            vx: 3 * n * s * x + c * vx + 2 * s * vy,
+            vy: -6 * n * (1 - c) * x - 2 * sign * s * vx + (4 * c - 3) * vy})
+    p.final_time(fixed=duration)
+    p.transcription(intervals, method)
+    return p
+
+
+def _cw_hop(coast_method: str, coast_intervals: int, sign: float = 1.0) -> Phases:
+    """Burn 100 s, coast 1500 s, burn 100 s: from 1 km behind the target to it, at rest at both ends."""
+    start = {("initial", k): v for k, v in zip(("x", "y", "vx", "vy"), (0.0, -1000.0, 0.0, 0.0), strict=True)}
+    stop = {("final", k): 0.0 for k in ("x", "y", "vx", "vy")}
+    burn1 = _cw_phase("burn1", 100.0, "zoh", 10, True, start)
+    coast = _cw_phase("coast", 1500.0, coast_method, coast_intervals, False, {}, sign)
+    burn2 = _cw_phase("burn2", 100.0, "zoh", 10, True, stop)
+    hop = Phases("cw-hop", [burn1, coast, burn2])
+    hop.connect(burn1, coast)
+    hop.connect(coast, burn2)
+    return hop
+
+
+def test_a_coast_by_its_closed_form_flow_is_the_collocated_coast_in_one_interval():
+    """The coast mapped by the Clohessy-Wiltshire state transition matrix across one 1500 s interval plans the
+    fuel a 40-interval Runge-Kutta coast plans (to 1e-8); a flow that is not the dynamics' (one entry's sign
+    flipped) is caught by the dense check, which integrates the stated dynamics."""
+    exact = _cw_hop("flow", 1).solve()
+    assert exact.status == "converged", exact.message
+    assert exact.figures.phases["coast"]["intervals"] == 1
+    stepped = _cw_hop("zoh", 40).solve()
+    assert exact.objective == pytest.approx(stepped.objective, rel=1e-8)
+    wrong = _cw_hop("flow", 1, sign=-1.0).solve()
+    assert wrong.status != "converged" and not wrong.verification.passed

@@ -16,7 +16,8 @@ CasADi differentiates through the steps: the Jacobian is the exact sensitivity o
 state, the control values and the final time (what SCPToolbox's and OpenSCvx's PTR get by integrating the
 variational equations, here by automatic differentiation). Path constraints hold at the nodes; the dense check
 judges them between. The objectives' quadrature: the rectangle rule for a zero-order hold (exact), the
-trapezoidal rule on the node values for a first-order hold.
+trapezoidal rule on the node values for a first-order hold. A closed-form flow (``"flow"``) replaces the
+Runge-Kutta steps of a zero-order hold by the map the user states (:class:`ClosedFormFlowProgram`).
 """
 
 from __future__ import annotations
@@ -145,3 +146,17 @@ class FirstOrderHoldProgram(HoldProgram):
     method = "foh"
     order = 1
 
+
+class ClosedFormFlowProgram(ZeroOrderHoldProgram):
+    """A zero-order hold whose node-to-node map is the problem's closed-form flow
+    (:meth:`~convexguid.ocp.problem.Problem.flow`) instead of Runge-Kutta steps: exact for any interval length."""
+
+    method = "flow"
+
+    def _flow(self) -> ca.Function:
+        p = self.problem
+        x0, ua, ub = (ca.SX.sym(name, size) for name, size in (("x0", self.nx), ("ua", self.nu), ("ub", self.nu)))
+        t0, h = ca.SX.sym("t0"), ca.SX.sym("h")
+        after = ca.vertcat(*(p.transitions.get(v.name, v.symbol) for v in p.states))
+        after = ca.substitute(after, ca.vertcat(p.state_vector(), p.control_vector(), p.time), ca.vertcat(x0, ua, h))
+        return ca.Function("flow", [x0, ua, ub, t0, h], [after])

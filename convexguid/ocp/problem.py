@@ -27,9 +27,9 @@ import numpy as np
 from convexguid.errors import SpecError
 from convexguid.ocp.size import check_problem_size
 
-TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh", "chebyshev")
+TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh", "chebyshev", "flow")
 """The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
-:mod:`convexguid.ocp.hold`, :mod:`convexguid.ocp.chebyshev`)."""
+:mod:`convexguid.ocp.hold`, :mod:`convexguid.ocp.chebyshev`; ``"flow"``: a closed-form flow, :meth:`Problem.flow`)."""
 
 
 @dataclass(frozen=True)
@@ -101,6 +101,7 @@ class Problem:
         self.controls: list[Variable] = []
         self.constraints: list[PathConstraint] = []
         self.rates: dict[str, ca.SX] = {}
+        self.transitions: dict[str, ca.SX] = {}
         self.tf: float | None = None
         self.tf_bounds: tuple[float, float] | None = None
         self.tf_guess: float | None = None
@@ -223,6 +224,25 @@ class Problem:
                 raise SpecError(f"{self.name}: dynamics of {name}: expected a scalar expression (got shape "
                                 f"{rate.shape})")
             self.rates[name] = rate
+
+    def flow(self, transitions: Mapping[ca.SX, ca.SX]) -> None:
+        """The dynamics' flow in closed form, ``{state symbol: its value after the time`` :attr:`time` ``}``, each an
+        expression of the states (their values at the start), the controls (held constant) and :attr:`time` (the
+        time elapsed), e.g. a Clohessy-Wiltshire coast by its state transition matrix or a Kepler arc. With
+        ``transcription(method="flow")`` each interval's defect is the node state less this flow from the node
+        before (exact: a long coast needs no more intervals than its constraints do); the dynamics stay stated as
+        well, and the dense check integrates them, so a flow that is not theirs shows as a final-state error. The
+        dynamics must not depend on the time (a flow from each node's own start). A parameter's flow is itself."""
+        by_symbol = {str(v.symbol): v.name for v in self.states}
+        for symbol, value in transitions.items():
+            name = by_symbol.get(str(symbol))
+            if name is None or name in self.parameter_names:
+                raise SpecError(f"{self.name}: flow: {symbol} is not a state of this problem (states: "
+                                f"{', '.join(n for n in by_symbol.values() if n not in self.parameter_names)})")
+            value = ca.SX(value)
+            if value.shape != (1, 1):
+                raise SpecError(f"{self.name}: flow of {name}: expected a scalar expression (got shape {value.shape})")
+            self.transitions[name] = value
 
     def path_constraint(self, name: str, expression: ca.SX, unit: str = "",
                         during: tuple[float, float] | None = None, at_nodes: bool = True) -> None:
@@ -385,10 +405,13 @@ class Problem:
         quadratic between nodes through a midpoint value, or with ``control="linear"`` linear between the node
         values), ``"zoh"`` (the control constant on each interval), ``"foh"`` (linear between nodes) or
         ``"chebyshev"`` (pseudospectral collocation on ``intervals + 1`` mapped Chebyshev nodes); the holds
-        integrate the dynamics across each interval by ``substeps`` Runge-Kutta steps."""
+        integrate the dynamics across each interval by ``substeps`` Runge-Kutta steps; ``"flow"`` holds the control
+        constant on each interval as ``"zoh"`` does but maps each node to the next by the closed-form flow
+        (:meth:`flow`)."""
         where = f"{self.name}: transcription"
-        if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < 2:
-            raise SpecError(f"{where}: intervals: expected an integer >= 2 (got {intervals!r})")
+        fewest = 1 if method == "flow" else 2  # a closed-form flow is exact across one interval
+        if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < fewest:
+            raise SpecError(f"{where}: intervals: expected an integer >= {fewest} (got {intervals!r})")
         if method not in TRANSCRIPTION_METHODS:
             raise SpecError(f"{where}: method: expected one of {', '.join(TRANSCRIPTION_METHODS)} (got {method!r})")
         if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
@@ -409,6 +432,15 @@ class Problem:
         if self.tf is None and self.tf_bounds is None:
             raise SpecError(f"{self.name}: final_time: not stated; call problem.final_time(fixed=...) or "
                             "problem.final_time(bounds=(lower, upper))")
+        if self.method == "flow":
+            missing = [v.name for v in self.states if v.name not in self.transitions
+                       and v.name not in self.parameter_names]
+            if missing:
+                raise SpecError(f"{self.name}: transcription: method 'flow' needs the flow of every state; none given "
+                                f"for {', '.join(missing)} (problem.flow({{state: value after time}}))")
+            if any(ca.depends_on(rate, self.time) for rate in self.rates.values()):
+                raise SpecError(f"{self.name}: transcription: method 'flow' needs dynamics that do not depend on the "
+                                "time (the flow starts afresh at every node)")
         if self.objective is None and self.phase_of is None:
             raise SpecError(f"{self.name}: objective: not stated; call problem.minimize_time(), "
                             "problem.minimize_energy(), problem.minimize_fuel() or problem.minimize_terminal(...)")

@@ -12,7 +12,7 @@ import numpy as np
 from convexguid.ocp.chebyshev import MappedChebyshevProgram
 from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
-from convexguid.ocp.hold import FirstOrderHoldProgram, ZeroOrderHoldProgram
+from convexguid.ocp.hold import ClosedFormFlowProgram, FirstOrderHoldProgram, ZeroOrderHoldProgram
 from convexguid.ocp.phased import Link, PhasedChecker, PhasedProgram
 from convexguid.ocp.phases import Phases
 from convexguid.ocp.transcription import Transcription
@@ -51,7 +51,7 @@ class OcpFigures(Figures):
 
 TRANSCRIPTIONS = {program.method: program
                   for program in (HermiteSimpsonProgram, ZeroOrderHoldProgram, FirstOrderHoldProgram,
-                                  MappedChebyshevProgram)}
+                                  MappedChebyshevProgram, ClosedFormFlowProgram)}
 """Every transcription by the name :meth:`~convexguid.ocp.problem.Problem.transcription` takes."""
 
 
