@@ -14,7 +14,6 @@ from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.hold import ClosedFormFlowProgram, FirstOrderHoldProgram, ZeroOrderHoldProgram
 from convexguid.ocp.phased import Link, PhasedChecker, PhasedProgram
-from convexguid.ocp.phases import Phases
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import solve_verified
 from convexguid.scp.engine import Log
@@ -22,7 +21,8 @@ from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.solution import Figures, Solution, Trajectory, optional, planned_solution
 from convexguid.threads import single_threaded
 
-if TYPE_CHECKING:  # the problem module imports this one when it solves
+if TYPE_CHECKING:  # the problem and phases modules import this one when they solve
+    from convexguid.ocp.phases import Phases
     from convexguid.ocp.problem import Problem
 
 
@@ -58,9 +58,10 @@ TRANSCRIPTIONS = {program.method: program
 def transcribe(problem: Problem | Phases) -> Transcription | PhasedProgram:
     """The problem transcribed as it says (Hermite-Simpson unless it chose another method); a maneuver in phases
     as every phase says, with its links and its first guess (:meth:`~convexguid.ocp.phases.Phases.guess`)."""
-    if isinstance(problem, Phases):
+    phases = getattr(problem, "phases", None)  # a Phases (which imports this module when it solves)
+    if phases is not None:
         problem.check()
-        programs = [transcribe(p) for p in problem.phases]
+        programs = [transcribe(p) for p in phases]
         return PhasedProgram(programs, tuple(Link(name, e) for name, e in problem.links), problem.guess(programs))
     return TRANSCRIPTIONS[problem.method](problem)
 
