@@ -259,16 +259,19 @@ class Problem:
         self.constraints.append(PathConstraint(name, expression, unit, window, at_nodes=bool(at_nodes)))
 
     def path_equality(self, name: str, expression: ca.SX, unit: str = "",
-                      during: tuple[float, float] | None = None) -> None:
+                      during: tuple[float, float] | None = None, at_midpoints: bool | None = None) -> None:
         """``expression == 0`` along the trajectory (or the share ``during`` of it), e.g. a thrust of fixed
         magnitude; nonconvex allowed (the engine linearizes it). The dense check judges ``|expression|`` between
         the nodes in its magnitude (its largest change on the flown track when every state and control moves by
         its own scale); where it breaks there the repair refines the grid (an equality cannot be tightened). An
         equality of the states alone (a singular arc's condition) holds at the nodes: at Hermite-Simpson's
-        midpoints too it would fix more values than the collocation leaves free."""
+        midpoints too it would fix more values than the collocation leaves free. ``at_midpoints`` says it
+        otherwise (False: at the nodes only, e.g. a unit thrust direction whose midpoint value is the mean of its
+        node values, as Wang & Tang's arcs hold it)."""
         self.path_constraint(name, expression, unit, during)
-        state_only = not ca.depends_on(self.constraints[-1].expression, self.control_vector())
-        self.constraints[-1] = replace(self.constraints[-1], equality=True, at_midpoints=not state_only)
+        if at_midpoints is None:
+            at_midpoints = ca.depends_on(self.constraints[-1].expression, self.control_vector())
+        self.constraints[-1] = replace(self.constraints[-1], equality=True, at_midpoints=bool(at_midpoints))
 
     def cone_constraint(self, name: str, vector, bound, unit: str = "",
                         during: tuple[float, float] | None = None) -> None:
