@@ -55,18 +55,10 @@ def cw_matrices(mean_motion: float, accel: float, dim: int = 3) -> tuple[np.ndar
     return _reduce(A, dim), _reduce(B, dim, np.arange(2))
 
 
-def cw_stm(mean_motion: float, dt: float | np.ndarray, dim: int = 3) -> np.ndarray:
-    """Closed-form state transition matrix :math:`\\Phi(\\Delta t)` of eq. (3), :math:`\\tau = n\\Delta t`.
-
-    ``dt`` may be an array (the result then has a leading batch axis) and complex
-    (complex-step differentiation).
-    """
-    _check_dim(dim)
-    n = mean_motion
-    tau = n * np.asarray(dt)
-    s, c = np.sin(tau), np.cos(tau)
-    zero, one = np.zeros_like(tau), np.ones_like(tau)
-    rows = [
+def _stm_rows(n: float, tau, s, c, zero, one) -> list[list]:
+    """The rows of the 3-D :math:`\\Phi(\\Delta t)` of eq. (3) from :math:`\\tau = n\\Delta t`, :math:`\\sin\\tau` and
+    :math:`\\cos\\tau` (numpy arrays, or CasADi expressions)."""
+    return [
         [one, 6 * (tau - s), zero, (4 * s - 3 * tau) / n, 2 * (1 - c) / n, zero],
         [zero, 4 - 3 * c, zero, 2 * (c - 1) / n, s / n, zero],
         [zero, zero, c, zero, zero, s / n],
@@ -74,8 +66,31 @@ def cw_stm(mean_motion: float, dt: float | np.ndarray, dim: int = 3) -> np.ndarr
         [zero, 3 * n * s, zero, -2 * s, c, zero],
         [zero, zero, -n * s, zero, zero, c],
     ]
+
+
+def cw_stm(mean_motion: float, dt: float | np.ndarray, dim: int = 3) -> np.ndarray:
+    """Closed-form state transition matrix :math:`\\Phi(\\Delta t)` of eq. (3), :math:`\\tau = n\\Delta t`.
+
+    ``dt`` may be an array (the result then has a leading batch axis) and complex
+    (complex-step differentiation).
+    """
+    _check_dim(dim)
+    tau = mean_motion * np.asarray(dt)
+    rows = _stm_rows(mean_motion, tau, np.sin(tau), np.cos(tau), np.zeros_like(tau), np.ones_like(tau))
     phi = np.moveaxis(np.array(rows), (0, 1), (-2, -1))
     return phi if dim == 3 else phi[..., IN_PLANE[:, None], IN_PLANE]
+
+
+def cw_stm_casadi(mean_motion: float, dt, dim: int = 3):
+    """:math:`\\Phi(\\Delta t)` of eq. (3) as a CasADi matrix of the expression ``dt`` (a coast of unknown
+    duration: a closed-form flow, :meth:`convexguid.ocp.Problem.flow`)."""
+    import casadi as ca  # the symbolic statement needs it; the numpy functions here do not
+
+    _check_dim(dim)
+    tau = mean_motion * dt
+    rows = _stm_rows(mean_motion, tau, ca.sin(tau), ca.cos(tau), 0, 1)
+    keep = range(6) if dim == 3 else IN_PLANE
+    return ca.vertcat(*(ca.horzcat(*(ca.SX(rows[i][j]) for j in keep)) for i in keep))
 
 
 def cw_stm_derivative(mean_motion: float, dt: float, dim: int = 3) -> np.ndarray:

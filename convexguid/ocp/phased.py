@@ -63,6 +63,7 @@ class PhasedProgram:
         self.num_variables = int(self.offsets[-1])
         self._guess = guess
         self._build_links()
+        self.affine = all(t.affine for t in self.phases) and not self.nonlinear_rows.size
 
     def with_phases(self, phases: list[Transcription]) -> PhasedProgram:
         """The same links on other transcriptions of the phases (a repair's)."""

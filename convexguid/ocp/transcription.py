@@ -247,6 +247,8 @@ class Transcription:
         self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
         self._objective_epigraph = ca.Function("epigraph", [z], [objective, ca.jacobian(objective, z)])
         self._defect_pattern = SparsityPattern(ca.jacobian(defect, z).sparsity())
+        # every map affine (linear dynamics, no nonlinear constraint): one convex program is the problem
+        self.affine = not any(ca.depends_on(ca.jacobian(e, z), z) for e in (*self._symbols[1:], defect))
         self._path_pattern = SparsityPattern(ca.jacobian(path, z).sparsity())
         self._epigraph_pattern = SparsityPattern(ca.jacobian(objective, z).sparsity())
 

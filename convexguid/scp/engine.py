@@ -160,7 +160,8 @@ class SCPAlgorithm:
         self.objective_size = max(abs(self.objective_at_start), float(np.abs(self.cost) @ self.scale))
         rho = self.penalty.initial(self.objective_size) if penalty is None else penalty
         state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
-                               merit=self._merit(ev, x, rho), radius=self.trust_region.initial, penalty=rho,
+                               merit=self._merit(ev, x, rho), penalty=rho, radius=self.settings.trust_region_max
+                               if getattr(self.program, "affine", False) else self.trust_region.initial,
                                started=started,
                                funnel=self.funnel.initial(penalty_sum(ev)) if self.settings.funnel else None)
         if infeasible:

@@ -171,7 +171,9 @@ class NonconvexProgram(Protocol):
     :math:`\\sum \\omega_i \\nabla^2 r_i + \\sum \\mu_j \\nabla^2 g_j + \\sum \\lambda_k \\nabla^2 e_k` for
     :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``; without it the engine differences the
     program's Jacobians (:class:`~convexguid.scp.lagrangian.LagrangianHessian`).
-    ``A`` and ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``.
+    ``A`` and ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``. ``affine``: True when every
+    nonlinear map is in fact affine (the subproblem is then the program itself: the first step takes the widest
+    trust region, and the problem is solved by one convex program and confirmed by the next).
     """
 
     num_variables: int
