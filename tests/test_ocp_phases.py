@@ -36,13 +36,16 @@ def _leg(name: str, start: float | None = None, end: float | None = None) -> tup
     return p, x
 
 
-def _hold_point(link_square: float | None = None) -> Phases:
+def _hold_point(link_square: float | None = None, at_least: float | None = None, squared: bool = False) -> Phases:
     first, x1 = _leg("to_hold", start=0.0)
     second, _ = _leg("from_hold", end=2.0)
     plan = Phases("hold-point", [first, second])
     plan.connect(first, second, ["x"])
     if link_square is not None:
         plan.link("hold_at", first.end(x1) ** 2 - link_square)
+    if at_least is not None:
+        hold = first.end(x1)
+        plan.link_constraint("hold_beyond", at_least**2 - hold**2 if squared else at_least - hold)
     return plan
 
 
@@ -62,6 +65,11 @@ def test_a_hold_point_between_two_legs_is_where_the_energy_is_least():
     assert nodes.t[-1] == pytest.approx(2.0) and held.figures.final_time_s == pytest.approx(2.0)
     assert held.figures.phases["from_hold"]["start_s"] == pytest.approx(1.0)
     assert held.verification.passed and "link_hold_at_error" in held.verification.final_errors
+    # the same hold as an inequality, x_hold >= 1.5 (a hard linear row) or x_hold^2 >= 2.25 (linearized)
+    for squared in (False, True):
+        beyond = _hold_point(at_least=1.5, squared=squared).solve()
+        assert beyond.status == "converged", beyond.message
+        assert beyond.objective == pytest.approx(30.0, rel=1e-7)
 
 
 def test_two_burn_orbit_raise_matches_dymos_and_ipopt_on_the_same_transcription():

@@ -4,9 +4,9 @@ Each phase is transcribed on its own (its method, grid, duration, margins); the 
 end, :math:`z = [z_1, \\dots, z_P]`, and every block of the engine's interface is theirs side by side (block
 diagonal Jacobians, the phase's name before each block's). The links between phases are written on the phases'
 end values, which are entries of ``z`` (a state at a phase's first or last node, its final time): a link affine in
-them (the continuity of a state) is a hard row of :math:`Az = b`; any other is an equality the engine linearizes,
-divided by its magnitude (the change of its value when every entry it uses moves by its own scale, at the first
-guess), as the defects are in the states' scales.
+them (the continuity of a state) is a hard row of :math:`Az = b` (an inequality one of :math:`Gz \\le h`); any
+other is an equality or inequality the engine linearizes, divided by its magnitude (the change of its value when
+every entry it uses moves by its own scale, at the first guess), as the defects are in the states' scales.
 
 The dense check flies every phase from its own planned first node (:class:`~convexguid.ocp.check.DenseChecker`)
 and judges each link on the flown ends: a phase whose own check fails is repaired as a single problem would be
@@ -33,11 +33,12 @@ from convexguid.verification import Verification
 
 @dataclass(frozen=True)
 class Link:
-    """``expression == 0`` on the phases' end values (:meth:`~convexguid.ocp.problem.Problem.start`,
-    :meth:`~convexguid.ocp.problem.Problem.end`)."""
+    """``expression == 0`` (or ``<= 0``, ``equality`` False) on the phases' end values
+    (:meth:`~convexguid.ocp.problem.Problem.start`, :meth:`~convexguid.ocp.problem.Problem.end`)."""
 
     name: str
     expression: ca.SX
+    equality: bool = True
 
 
 @dataclass(frozen=True)
@@ -63,7 +64,7 @@ class PhasedProgram:
         self.num_variables = int(self.offsets[-1])
         self._guess = guess
         self._build_links()
-        self.affine = all(t.affine for t in self.phases) and not self.nonlinear_rows.size
+        self.affine = all(t.affine for t in self.phases) and not self.nonlinear
 
     def with_phases(self, phases: list[Transcription]) -> PhasedProgram:
         """The same links on other transcriptions of the phases (a repair's)."""
@@ -102,6 +103,8 @@ class PhasedProgram:
     def _build_links(self) -> None:
         rows = ca.vertcat(*(ca.SX(link.expression) for link in self.links)) if self.links else ca.SX(0, 1)
         self.link_names = [link.name for link in self.links for _ in range(ca.SX(link.expression).shape[0])]
+        self.link_equality = np.array([link.equality for link in self.links
+                                       for _ in range(ca.SX(link.expression).shape[0])], dtype=bool)
         references = ca.symvar(rows)
         self._references = [str(r) for r in references]
         z = ca.SX.sym("z", self.num_variables)
@@ -113,23 +116,30 @@ class PhasedProgram:
         value, slope = (np.asarray(v, dtype=float) for v in ca.Function("links", [z], [rows_in_z, jacobian])(guess))
         magnitude = np.abs(slope) @ self.variable_scale()
         self.link_magnitudes = np.where(magnitude > 0, magnitude, 1.0)
-        # the affine links: hard rows A z = b (their value is slope z - b, exactly)
-        self._affine = (sp.coo_matrix(slope[affine]), slope[affine] @ guess - value.ravel()[affine])
-        nonlinear = rows_in_z[np.flatnonzero(~affine).tolist(), 0] / ca.DM(self.link_magnitudes[~affine])
-        self.nonlinear_rows = np.flatnonzero(~affine)
-        self._nonlinear = ca.Function("nonlinear_links", [z], [nonlinear, ca.jacobian(nonlinear, z)])
-        self._nonlinear_pattern = SparsityPattern(ca.jacobian(nonlinear, z).sparsity())
-        self._symbols = (z, nonlinear)
+        # the affine links: hard rows A z = b or G z <= h (their value is slope z - b, exactly)
+        offset = slope @ guess - value.ravel()
+        self._affine = {equality: (sp.coo_matrix(slope[affine & (self.link_equality == equality)]),
+                                   offset[affine & (self.link_equality == equality)]) for equality in (True, False)}
+        # the others: an equality block and an inequality block the engine linearizes, each row in its magnitude
+        self._symbols, self._blocks = z, {}
+        for equality in (True, False):
+            chosen = np.flatnonzero(~affine & (self.link_equality == equality))
+            block = rows_in_z[chosen.tolist(), 0] / ca.DM(self.link_magnitudes[chosen])
+            self._blocks[equality] = (block, ca.Function("nonlinear_links", [z], [block, ca.jacobian(block, z)]),
+                                      SparsityPattern(ca.jacobian(block, z).sparsity()))
+        self.nonlinear = any(self._blocks[e][0].shape[0] for e in (True, False))
         self._on_ends = ca.Function("links_on_ends", [ca.vertcat(*references)] if references else [ca.SX(0, 1)],
                                     [rows / ca.DM(self.link_magnitudes)])
 
     def link_errors(self, starts: list[np.ndarray], ends: list[np.ndarray], durations: list[float]) -> np.ndarray:
-        """Each link row's value, in its magnitude, on given phase ends (the flown ones in the dense check)."""
+        """How far each link row is broken, in its magnitude, on given phase ends (the flown ones in the dense
+        check): an equality's absolute value, an inequality's excess."""
         values = []
         for name in self._references:
             i, which, index = self._reference_index(name)
             values.append(durations[i] if index < 0 else (starts if which == "start" else ends)[i][index])
-        return np.abs(np.asarray(self._on_ends(np.array(values)), dtype=float).ravel())
+        errors = np.asarray(self._on_ends(np.array(values)), dtype=float).ravel()
+        return np.where(self.link_equality, np.abs(errors), np.maximum(errors, 0.0))
 
     # --- NonconvexProgram ---------------------------------------------------------------------------------------
     def initial_guess(self) -> np.ndarray:
@@ -148,10 +158,11 @@ class PhasedProgram:
 
     def linear_constraints(self) -> LinearConstraints:
         parts = [t.linear_constraints() for t in self.phases]
-        A = sp.vstack([sp.block_diag([sp.coo_matrix(c.A) for c in parts]), self._affine[0]]).tocoo()
-        G = sp.block_diag([sp.coo_matrix(c.G) for c in parts]).tocoo()
-        return LinearConstraints(A, np.concatenate([*(c.b for c in parts), self._affine[1]]), G,
-                                 np.concatenate([c.h for c in parts]))
+        (A_link, b_link), (G_link, h_link) = self._affine[True], self._affine[False]
+        A = sp.vstack([sp.block_diag([sp.coo_matrix(c.A) for c in parts]), A_link]).tocoo()
+        G = sp.vstack([sp.block_diag([sp.coo_matrix(c.G) for c in parts]), G_link]).tocoo()
+        return LinearConstraints(A, np.concatenate([*(c.b for c in parts), b_link]), G,
+                                 np.concatenate([*(c.h for c in parts), h_link]))
 
     def output_constraints(self) -> OutputConstraints:
         return OutputConstraints.none(self.residual_weights().size)
@@ -170,10 +181,13 @@ class PhasedProgram:
             cones += [ConeBlock(f"{t.problem.name}: {c.name}", c.values,
                                 _shifted(c.jacobian, offset, n) if jacobians else None, c.sizes, c.unit)
                       for c in ev.cones]
-        if self.nonlinear_rows.size:
-            value, jacobian = self._nonlinear(z)
-            equalities.append(ConstraintBlock("links", np.asarray(value, dtype=float).ravel(),
-                                              self._nonlinear_pattern.coo(jacobian) if jacobians else None))
+        for equality, out in ((True, equalities), (False, inequalities)):
+            block, function, pattern = self._blocks[equality]
+            if block.shape[0]:
+                value, jacobian = function(z)
+                out.append(ConstraintBlock("links" if equality else "link_constraints",
+                                           np.asarray(value, dtype=float).ravel(),
+                                           pattern.coo(jacobian) if jacobians else None))
         residual_jacobian = (sp.vstack(residual_jacobians).tocoo() if residual_jacobians else None)
         return Evaluation(np.concatenate(residuals), residual_jacobian, tuple(inequalities), tuple(equalities),
                           tuple(cones))
@@ -189,10 +203,11 @@ class PhasedProgram:
 
     @cached_property
     def _link_hessian(self) -> tuple[ca.Function, SparsityPattern]:
-        z, rows = self._symbols
-        lam = ca.SX.sym("lam", rows.shape[0])
-        hessian = ca.hessian(ca.dot(lam, rows), z)[0]
-        return ca.Function("link_hessian", [z, lam], [hessian]), SparsityPattern(hessian.sparsity())
+        """The nonlinear links' curvature, weighted by their equality and inequality multipliers."""
+        z, (equalities, inequalities) = self._symbols, (self._blocks[True][0], self._blocks[False][0])
+        lam, mu = ca.SX.sym("lam", equalities.shape[0]), ca.SX.sym("mu", inequalities.shape[0])
+        hessian = ca.hessian(ca.dot(lam, equalities) + ca.dot(mu, inequalities), z)[0]
+        return ca.Function("link_hessian", [z, lam, mu], [hessian]), SparsityPattern(hessian.sparsity())
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
         """The phases' exact Lagrangian Hessians side by side, and the nonlinear links' curvature."""
@@ -203,9 +218,10 @@ class PhasedProgram:
             blocks.append(t.lagrangian_hessian(piece, share))
             equality, inequality = equality + m_eq, inequality + m_in
         hessian = sp.block_diag(blocks).tocsr()
-        if self.nonlinear_rows.size:
+        if self.nonlinear:
             function, pattern = self._link_hessian
-            hessian = hessian + pattern.coo(function(z, weights.equality[equality:])).tocsr()
+            hessian = hessian + pattern.coo(function(z, weights.equality[equality:],
+                                                     weights.inequality[inequality:])).tocsr()
         return hessian
 
     def symbolic_nlp(self) -> SymbolicNLP:
@@ -216,10 +232,12 @@ class PhasedProgram:
             nlp = t.symbolic_nlp(z[int(a): int(b)])
             objective += nlp.objective
             blocks += [(f"{t.problem.name}: {name}", e, lower, upper) for name, e, lower, upper in nlp.blocks]
-        A, b = self._affine
-        own_z, nonlinear = self._symbols
-        blocks += [("links", ca.substitute(nonlinear, own_z, z), 0.0, 0.0),
-                   ("linear_links", ca.DM(A.toarray()) @ z - b, 0.0, 0.0)]
+        for equality in (True, False):
+            (matrix, right), block = self._affine[equality], self._blocks[equality][0]
+            lower = 0.0 if equality else -np.inf
+            name = "links" if equality else "link_constraints"
+            blocks += [(name, ca.substitute(block, self._symbols, z), lower, 0.0),
+                       (f"linear_{name}", ca.DM(matrix.toarray()) @ z - right, lower, 0.0)]
         return SymbolicNLP(z, objective, tuple(blocks))
 
 

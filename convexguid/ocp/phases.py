@@ -5,9 +5,10 @@ Each phase states its own states, controls (none: a coast), duration (fixed, or 
 :meth:`~convexguid.ocp.problem.Problem.final_time`), constraints, transcription and grid, and its time runs from
 0 at its start. :class:`Phases` joins them in time order: :meth:`Phases.connect` makes states continuous from one
 phase to another, :meth:`Phases.link` states any equality of their end values (:meth:`Problem.start`,
-:meth:`Problem.end`, :attr:`Problem.duration`), linear or not. The objective is the sum of the phases' objectives
-(a phase may have none). The plan goes through the same engine, the same dense check per phase (and of every link
-on the flown ends) and the same repairs as a single problem's (:mod:`convexguid.ocp.phased`).
+:meth:`Problem.end`, :attr:`Problem.duration`), linear or not, and :meth:`Phases.link_constraint` an inequality.
+The objective is the sum of the phases' objectives (a phase may have none). The plan goes through the same engine,
+the same dense check per phase (and of every link on the flown ends) and the same repairs as a single problem's
+(:mod:`convexguid.ocp.phased`).
 
 Minimal use::
 
@@ -49,7 +50,8 @@ class Phases:
                 raise SpecError(f"{name}: phase {p.name!r} is already a phase of {p.phase_of!r}")
             p.phase_of = name
         self.phases = phases
-        self.links: list[tuple[str, ca.SX]] = []
+        self.links: list[tuple[str, ca.SX, bool]] = []
+        """``(name, expression, equality)`` of every link, the continuities of :meth:`connect` among them."""
         self.connections: list[tuple[int, int, tuple[str, ...]]] = []
 
     def _index(self, phase: Problem, where: str) -> int:
@@ -75,7 +77,7 @@ class Phases:
                             f"both phases (shared: {', '.join(shared) or 'none'})")
         for n in names:
             self.links.append((f"{first.name}.{n}->{second.name}",
-                               second.start(by_name[1][n]) - first.end(by_name[0][n])))
+                               second.start(by_name[1][n]) - first.end(by_name[0][n]), True))
         self.connections.append((i, j, names))
 
     def link(self, name: str, expression) -> None:
@@ -85,14 +87,20 @@ class Phases:
         if expression.shape[1] != 1 or expression.shape[0] < 1:
             raise SpecError(f"{self.name}: link {name!r}: expected a column of expressions (got shape "
                             f"{expression.shape})")
-        if name in {label for label, _ in self.links}:
+        if name in {link[0] for link in self.links}:
             raise SpecError(f"{self.name}: link {name!r}: the name is already taken")
         known = {key for p in self.phases for key in p.ends}
         unknown = sorted({str(s) for s in ca.symvar(expression)} - known)
         if unknown:
             raise SpecError(f"{self.name}: link {name!r}: uses {', '.join(unknown)}; a link is stated on phase ends "
                             "(phase.start(state), phase.end(state), phase.duration)")
-        self.links.append((name, expression))
+        self.links.append((name, expression, True))
+
+    def link_constraint(self, name: str, expression) -> None:
+        """``expression <= 0`` on the phases' end values, e.g. a coast of at least 600 s,
+        ``600 - coast.duration``, or a whole maneuver within its window."""
+        self.link(name, expression)
+        self.links[-1] = (*self.links[-1][:2], False)
 
     def check(self) -> None:
         """Refuse a statement that cannot be solved, one line naming what is wrong."""

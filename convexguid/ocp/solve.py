@@ -62,7 +62,7 @@ def transcribe(problem: Problem | Phases) -> Transcription | PhasedProgram:
     if phases is not None:
         problem.check()
         programs = [transcribe(p) for p in phases]
-        return PhasedProgram(programs, tuple(Link(name, e) for name, e in problem.links), problem.guess(programs))
+        return PhasedProgram(programs, tuple(Link(*link) for link in problem.links), problem.guess(programs))
     return TRANSCRIPTIONS[problem.method](problem)
 
 
@@ -158,9 +158,9 @@ def solve_phases(statement: Phases, started: float, max_iterations: int = 300, v
         phases[t.problem.name] = {"start_s": start, "duration_s": duration, "method": t.method, "intervals": t.N}
         start += duration
     size = [program_size(t, piece) for t, piece in zip(final.phases, final.pieces(outcome.x), strict=True)]
-    links_rows = final.link_magnitudes.size
-    total = ProgramSize(final.num_variables, sum(s.num_equality_constraints for s in size) + links_rows,
-                        sum(s.num_inequality_constraints for s in size))
+    equal_links = int(final.link_equality.sum())
+    total = ProgramSize(final.num_variables, sum(s.num_equality_constraints for s in size) + equal_links,
+                        sum(s.num_inequality_constraints for s in size) + final.link_equality.size - equal_links)
     node_table = _joined(nodes)
     return planned_solution(_Statement(statement.name), outcome, started, total, nodes=node_table,
                             dense=_joined(dense) if outcome.check is not None else None,
