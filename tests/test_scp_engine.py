@@ -450,3 +450,18 @@ def test_auto_goes_sparse_for_a_large_or_sparse_program():
     sparse = Evaluation(np.ones(3), sp.coo_matrix(np.eye(3, n)),
                         equalities=(ConstraintBlock("e", np.zeros(4), sp.coo_matrix(np.eye(4, n))),))
     assert not choose_subproblem("auto", n, sparse, np.ones(3)).condensed
+
+
+def test_a_program_brought_by_the_user_reaches_its_closed_form():
+    """examples/own_program.py (docs/ocp.md, "Bring your own program"): the point of the unit circle closest to
+    (2, 1) below y = 0.3 is (sqrt(0.91), 0.3)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "own_program.py"
+    spec = importlib.util.spec_from_file_location("own_program", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    result = solve_scp(module.ClosestPointOnCircle(), SCPSettings())
+    assert result.status == "converged", result.message
+    assert result.x == pytest.approx([np.sqrt(0.91), 0.3], abs=1e-7)
