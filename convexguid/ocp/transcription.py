@@ -235,22 +235,23 @@ class Transcription:
         path_equalities = ca.vertcat(*equalities) if equalities else ca.SX(0, 1)
         boundary, self.boundary_equality_rows = nonlinear_equalities(self, X, tf)
         self.num_path = path.shape[0]
-        self._path_equalities = ca.Function("path_equalities", [z], [path_equalities,
-                                                                      ca.jacobian(path_equalities, z)])
-        self._path_equality_pattern = SparsityPattern(ca.jacobian(path_equalities, z).sparsity())
-        self._boundary_equalities = ca.Function("boundary_equalities", [z], [boundary, ca.jacobian(boundary, z)])
-        self._boundary_pattern = SparsityPattern(ca.jacobian(boundary, z).sparsity())
         self._build_cones(z, V, cones)
         objective = self._epigraph(z, X[:, N], tf) if self.epigraph else ca.SX(0, 1)
         self._symbols = (z, ca.vertcat(defect, path_equalities, boundary), path, objective)
-        self._defects = ca.Function("defects", [z], [defect, ca.jacobian(defect, z)])
-        self._path = ca.Function("path", [z], [path, ca.jacobian(path, z)])
-        self._objective_epigraph = ca.Function("epigraph", [z], [objective, ca.jacobian(objective, z)])
-        self._defect_pattern = SparsityPattern(ca.jacobian(defect, z).sparsity())
+        # each block's value and exact sparse Jacobian, one CasADi function each (a Jacobian built once: building
+        # them is most of the transcription's time)
+        blocks = {"defects": defect, "path": path, "path_equalities": path_equalities, "boundary": boundary,
+                  "epigraph": objective}
+        jacobians = {name: ca.jacobian(e, z) for name, e in blocks.items()}
+        functions = {name: ca.Function(name, [z], [blocks[name], jacobians[name]]) for name in blocks}
+        patterns = {name: SparsityPattern(jacobian.sparsity()) for name, jacobian in jacobians.items()}
+        self._defects, self._defect_pattern = functions["defects"], patterns["defects"]
+        self._path, self._path_pattern = functions["path"], patterns["path"]
+        self._path_equalities, self._path_equality_pattern = functions["path_equalities"], patterns["path_equalities"]
+        self._boundary_equalities, self._boundary_pattern = functions["boundary"], patterns["boundary"]
+        self._objective_epigraph, self._epigraph_pattern = functions["epigraph"], patterns["epigraph"]
         # every map affine (linear dynamics, no nonlinear constraint): one convex program is the problem
-        self.affine = not any(ca.depends_on(ca.jacobian(e, z), z) for e in (*self._symbols[1:], defect))
-        self._path_pattern = SparsityPattern(ca.jacobian(path, z).sparsity())
-        self._epigraph_pattern = SparsityPattern(ca.jacobian(objective, z).sparsity())
+        self.affine = not any(ca.depends_on(jacobian, z) for jacobian in jacobians.values())
 
     def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
         """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value: one
