@@ -194,3 +194,40 @@ def test_a_coast_by_its_closed_form_flow_is_the_collocated_coast_in_one_interval
     assert exact.objective == pytest.approx(stepped.objective, rel=1e-8)
     wrong = _cw_hop("flow", 1, sign=-1.0).solve()
     assert wrong.status != "converged" and not wrong.verification.passed
+
+
+def _planar_transfer(name: str, start: float, duration: float, intervals: int, ends: dict) -> Problem:
+    """A planar double integrator (zero-order hold) with one engine: thrust magnitude at most 1 m/s^2 (a cone), least
+    fuel (the thrust's 2-norm), and a keep-out disc of radius 0.5 m about (1, 0.2) m; the time from ``start``."""
+    p = Problem(name)
+    x, y, vx, vy = (p.state(k, initial=ends.get(("initial", k)), final=ends.get(("final", k)), scale=2.0)
+                    for k in ("x", "y", "vx", "vy"))
+    ux, uy = p.control("ux", scale=1.0), p.control("uy", scale=1.0)
+    p.dynamics({x: vx, y: vy, vx: ux, vy: uy})
+    p.cone_constraint("thrust", [ux, uy], 1.0, unit="m/s^2")
+    p.path_constraint("keep_out", 0.25 - (x - 1.0) ** 2 - (y - 0.2) ** 2, unit="m^2")
+    p.final_time(fixed=duration)
+    p.minimize_fuel(norm=2)
+    p.transcription(intervals, "zoh")
+    return p
+
+
+def test_a_maneuver_cut_in_two_phases_is_the_same_program_as_in_one():
+    """The same least-fuel transfer (thrust cone, keep-out disc, zero-order hold) over 4 s on 16 intervals, stated
+    whole and as two phases of 2 s and 8 intervals joined by continuity: the same transcribed program, so the same
+    fuel (to 1e-7), after the same repair (the keep-out disc, broken between nodes, tightened at the nodes where
+    it broke). IPOPT on the two-phase program as stated, untightened, is lower by that tightening's price only."""
+    start = {("initial", k): v for k, v in zip(("x", "y", "vx", "vy"), (0.0, 0.0, 0.0, 0.0), strict=True)}
+    stop = {("final", k): v for k, v in zip(("x", "y", "vx", "vy"), (2.0, 0.0, 0.0, 0.0), strict=True)}
+    whole = _planar_transfer("whole", 0.0, 4.0, 16, {**start, **stop}).solve()
+    assert whole.status == "converged", whole.message
+    first, second = _planar_transfer("first", 0.0, 2.0, 8, start), _planar_transfer("second", 2.0, 2.0, 8, stop)
+    halves = Phases("halves", [first, second])
+    halves.connect(first, second)
+    split = halves.solve()
+    assert split.status == "converged", split.message
+    assert split.objective == pytest.approx(whole.objective, rel=1e-7)
+    assert [r.repair for r in split.repair_rounds][1:] and len(split.repair_rounds) == len(whole.repair_rounds)
+    answer = solve_with_ipopt(transcribe(halves))
+    assert answer.success and answer.objective <= split.objective <= answer.objective * (1 + 1e-3)
+    assert split.verification.passed and "first.keep_out" in {c.name for c in split.verification.checks}
