@@ -5,13 +5,12 @@ honest statuses after a repair)."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pytest
+from example_modules import load_example
 
 from convexguid.classics.bench import published_figure
 from convexguid.ocp import Problem
@@ -22,14 +21,9 @@ from convexguid.scp.policies import FunnelPolicy
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, SCPSettings
 from convexguid.verification import Verification
 
-CLASSICS = Path(__file__).resolve().parents[1] / "examples" / "classics"
-
 
 def _module(name: str):
-    spec = importlib.util.spec_from_file_location(f"classic_{name}", CLASSICS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example(f"classics/{name}")
 
 
 @pytest.mark.parametrize("name", ["particle_steering", "bryson_denham", "orbit_raising", "robot_arm"])

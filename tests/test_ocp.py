@@ -15,7 +15,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import re
@@ -24,6 +23,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 import pytest
+from example_modules import load_example
 from scipy.optimize import brentq
 
 from convexguid.errors import SpecError
@@ -35,10 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _example(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "examples" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example(name)
 
 
 def cycloid_time(x: float, y: float, g: float) -> float:

@@ -12,13 +12,12 @@ use them, against closed forms and IPOPT.
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from example_modules import load_example
 
 from convexguid.errors import SpecError
 from convexguid.ocp import Problem
@@ -33,8 +32,6 @@ from convexguid.scp.problem import (
     OutputConstraints,
     SCPSettings,
 )
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 class _NearestOnCircle:
@@ -134,10 +131,7 @@ def test_a_nonconvex_cone_is_refused_naming_the_entry(vector, bound, message):
 
 
 def _powered_descent():
-    spec = importlib.util.spec_from_file_location("powered_descent", ROOT / "examples" / "powered_descent.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example("powered_descent")
 
 
 def test_powered_descent_is_lossless_and_ipopts_mass_on_the_nonconvex_problem():

@@ -12,12 +12,11 @@
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from example_modules import load_example
 from scipy.linalg import expm
 
 from convexguid.errors import SpecError
@@ -28,14 +27,9 @@ from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
 from convexguid.transcription.mapped_chebyshev import MappedChebyshev
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _proxops():
-    spec = importlib.util.spec_from_file_location("proxops_openscvx", ROOT / "examples" / "proxops_openscvx.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example("proxops_openscvx")
 
 
 def _double_integrator(method: str, intervals: int = 8) -> Problem:
@@ -173,9 +167,7 @@ def test_the_mapped_chebyshev_grid_is_spectrally_accurate_on_the_brachistochrone
     (Hermite-Simpson needs 30 intervals for 1e-6), verified by the dense check between the nodes."""
     from test_ocp import cycloid_time
 
-    spec = importlib.util.spec_from_file_location("brachistochrone", ROOT / "examples" / "brachistochrone.py")
-    brachistochrone = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(brachistochrone)
+    brachistochrone = load_example("brachistochrone")
     problem = brachistochrone.build(order)
     problem.transcription(order, "chebyshev")
     solution = problem.solve()

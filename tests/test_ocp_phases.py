@@ -1,26 +1,21 @@
 """Maneuvers in phases (convexguid.ocp.Phases): analytic answers, two published multi-phase problems against their
 published figures and IPOPT on the same transcription, and statements refused with one line."""
 
-import importlib.util
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pytest
+from example_modules import EXAMPLES, load_example
 
 from convexguid.errors import SpecError
 from convexguid.ocp import Phases, Problem
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "phases"
-
 
 def _example(name: str):
-    spec = importlib.util.spec_from_file_location(f"phases_{name}", EXAMPLES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example(f"phases/{name}")
 
 
 def _leg(name: str, start: float | None = None, end: float | None = None) -> tuple[Problem, object]:
@@ -135,7 +130,7 @@ def test_a_campaign_runs_a_maneuver_in_phases(tmp_path):
 
     source = Path(__file__).resolve().parents[1] / "problems" / "campaigns" / "two_burn_orbit_raise_vs_radius.yaml"
     data = yaml.safe_load(source.read_text())
-    data["problem"] = str(EXAMPLES / "two_burn_orbit_raise.py")
+    data["problem"] = str(EXAMPLES / "phases" / "two_burn_orbit_raise.py")
     data["grid"][0]["values"] = [2.0, 3.0]
     path = tmp_path / "campaign.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from example_modules import load_example
 from scipy.optimize import minimize
 
 import convexguid.scp.engine as engine
@@ -455,13 +456,7 @@ def test_auto_goes_sparse_for_a_large_or_sparse_program():
 def test_a_program_brought_by_the_user_reaches_its_closed_form():
     """examples/own_program.py (docs/ocp.md, "Bring your own program"): the point of the unit circle closest to
     (2, 1) below y = 0.3 is (sqrt(0.91), 0.3)."""
-    import importlib.util
-    from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "examples" / "own_program.py"
-    spec = importlib.util.spec_from_file_location("own_program", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    result = solve_scp(module.ClosestPointOnCircle(), SCPSettings())
+    result = solve_scp(load_example("own_program").ClosestPointOnCircle(), SCPSettings())
     assert result.status == "converged", result.message
     assert result.x == pytest.approx([np.sqrt(0.91), 0.3], abs=1e-7)
