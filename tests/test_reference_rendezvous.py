@@ -17,7 +17,6 @@ from scipy.linalg import expm
 ca = pytest.importorskip("casadi")
 
 from convexguid.dynamics.clohessy_wiltshire import cw_matrices  # noqa: E402
-from convexguid.families.rendezvous.arc_phases import PhasedArcsProgram  # noqa: E402
 from convexguid.families.rendezvous.arcs import ArcsProgram  # noqa: E402
 from convexguid.families.rendezvous.bench import run_rendezvous_bench  # noqa: E402
 from convexguid.families.rendezvous.case import build_case  # noqa: E402
@@ -67,20 +66,6 @@ def test_ipopt_optimum_satisfies_the_numpy_transcription(paper_solves):
     assert np.allclose(lin.A @ ipopt.x, lin.b, rtol=0, atol=1e-6)
     assert np.all(lin.G @ ipopt.x <= lin.h + 1e-9)
     assert ipopt.objective == pytest.approx(program.linear_cost() @ ipopt.x, rel=1e-14)
-
-
-def test_ipopt_optimum_satisfies_the_phased_statement(paper_solves):
-    """The arcs stated in phases on convexguid.ocp hold at IPOPT's optimum too: every phase's defects and unit
-    directions, the continuity and total-time rows, the boundary states and T >= 0; the same burn time."""
-    program, _, ipopt = paper_solves
-    phased = PhasedArcsProgram(program.case, program.layout.burns, program.layout.subintervals)
-    z = phased.from_design_vector(ipopt.x)
-    for block in phased.evaluate(z, jacobians=False).equalities:
-        assert np.max(np.abs(block.values)) < 1e-8, block.name
-    lin = phased.linear_constraints()
-    assert np.allclose(lin.A @ z, lin.b, rtol=0, atol=1e-6)
-    assert np.all(lin.G @ z <= lin.h + 1e-9)
-    assert ipopt.objective == pytest.approx(phased.linear_cost() @ z, rel=1e-14)
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -13,16 +12,12 @@ from scipy.linalg import expm
 
 from convexguid.api import solve
 from convexguid.cli import main
-from convexguid.dynamics.clohessy_wiltshire import cw_matrices, cw_stm, cw_stm_casadi, cw_stm_derivative, cw_zoh
+from convexguid.dynamics.clohessy_wiltshire import cw_matrices, cw_stm, cw_stm_derivative, cw_zoh
 from convexguid.errors import SpecError
-from convexguid.families.rendezvous.arc_phases import PhasedArcsProgram
 from convexguid.families.rendezvous.arcs import ArcsProgram
 from convexguid.families.rendezvous.case import build_case
 from convexguid.families.rendezvous.lcvx import burn_structure, solve_lcvx
-from convexguid.families.rendezvous.solve import planning_setup
 from convexguid.problem_files import load_problem
-from convexguid.scp.engine import solve_scp
-from convexguid.scp.problem import SCPSettings
 from convexguid.transcription.hermite_simpson import hermite_simpson_defects
 
 PAPER = Path(__file__).parent.parent / "problems" / "wang2003_rendezvous.yaml"
@@ -37,14 +32,6 @@ N = 0.0011313
 def test_stm_matches_matrix_exponential(dim, dt):
     A, _ = cw_matrices(N, 0.5, dim)
     assert np.allclose(cw_stm(N, dt, dim), expm(A * dt), rtol=1e-12, atol=1e-12 * max(1.0, dt))
-
-
-@pytest.mark.parametrize("dim", [2, 3])
-def test_casadi_stm_is_the_numpy_one(dim):
-    duration = ca.SX.sym("t")
-    stm = ca.Function("stm", [duration], [cw_stm_casadi(N, duration, dim)])
-    for dt in (0.5, 600.0, 5400.0):
-        assert np.array_equal(np.asarray(stm(dt)), cw_stm(N, dt, dim))
 
 
 def test_stm_derivative_is_a_times_stm():
@@ -117,23 +104,14 @@ def paper_case():
     return build_case(load_problem(PAPER))
 
 
-STATEMENTS = [ArcsProgram, PhasedArcsProgram]
-"""The arcs' NLP written by hand (the method's) and stated in phases on convexguid.ocp."""
-
-
-@pytest.mark.parametrize("statement", STATEMENTS)
-def test_nlp_dimensions_are_the_papers(paper_case, statement):
-    size = statement(paper_case, 2, 12).size()
+def test_nlp_dimensions_are_the_papers(paper_case):
+    size = ArcsProgram(paper_case, 2, 12).size()
     assert (size.num_variables, size.num_equality_constraints, size.num_inequality_constraints) == (159, 135, 3)
-    space = build_case(load_problem(SPACE))
-    size = statement(space, 2, 12).size()
-    assert (size.num_variables, size.num_equality_constraints, size.num_inequality_constraints) == (237, 189, 3)
 
 
-@pytest.mark.parametrize("statement", STATEMENTS)
 @pytest.mark.parametrize("coasts", [(False, False), (True, True)], ids=["paper", "lead-and-trail-coasts"])
-def test_arcs_jacobians_match_finite_differences(paper_case, coasts, statement):
-    program = statement(paper_case, 2, 4, None, *coasts)
+def test_arcs_jacobians_match_finite_differences(paper_case, coasts):
+    program = ArcsProgram(paper_case, 2, 4, None, *coasts)
     rng = np.random.default_rng(0)
     x = program.initial_guess() + 0.01 * program.variable_scale() * rng.normal(size=program.num_variables)
     ev = program.evaluate(x)
@@ -148,57 +126,6 @@ def test_arcs_jacobians_match_finite_differences(paper_case, coasts, statement):
             numeric = (program.evaluate(xp, False).equalities[k].values
                        - program.evaluate(xm, False).equalities[k].values) / (2 * step)
             assert np.allclose(jac[:, j], numeric, rtol=1e-5, atol=1e-9), (block.name, j)
-
-
-@pytest.mark.parametrize("coasts", [(False, False), (True, True)], ids=["paper", "lead-and-trail-coasts"])
-def test_the_phases_state_the_hand_written_nlp(paper_case, coasts):
-    """At one design vector the phased statement's burn defects, unit directions, objective and variable scales are
-    the hand-written program's, its coast defects theirs with the opposite sign (the end state less the flown one),
-    and its linear rows broken by as much (the continuity rows it adds hold)."""
-    hand, phased = (statement(paper_case, 2, 4, None, *coasts) for statement in STATEMENTS)
-    rng = np.random.default_rng(0)
-    x = hand.initial_guess() + 0.01 * hand.variable_scale() * rng.normal(size=hand.num_variables)
-    z = phased.from_design_vector(x)
-    assert np.array_equal(phased.design_vector(z), x)
-    assert np.array_equal(phased.design_vector(phased.variable_scale()), hand.variable_scale())
-    written = {b.name: b.values for b in hand.evaluate(x, False).equalities}
-    stated = phased.evaluate(z, False).equalities
-
-    def rows(prefix: str, suffix: str) -> np.ndarray:
-        return np.concatenate([b.values for b in stated if b.name.startswith(prefix) and b.name.endswith(suffix)])
-
-    np.testing.assert_allclose(rows("burn", "dynamics_defects"), written["burn_defects"], rtol=1e-12, atol=1e-15)
-    np.testing.assert_allclose(rows("coast", "dynamics_defects"), -written["coast_defects"], rtol=1e-12,
-                               atol=1e-15)
-    np.testing.assert_allclose(rows("burn", "path_equalities"), written["unit_thrust_direction"], rtol=1e-14,
-                               atol=1e-15)
-    assert phased.linear_cost() @ z == pytest.approx(hand.linear_cost() @ x, rel=1e-15)
-    for program, point in ((hand, x), (phased, z)):
-        lin = program.linear_constraints()
-        assert np.all(lin.G @ point <= lin.h)
-    broken = [np.max(np.abs(lin.A @ point - lin.b)) for lin, point in ((hand.linear_constraints(), x),
-                                                                        (phased.linear_constraints(), z))]
-    assert broken[1] == pytest.approx(broken[0], rel=1e-12)
-
-
-@pytest.mark.parametrize("problem", [PAPER, SPACE], ids=["paper", "out-of-plane"])
-def test_the_phases_plan_the_hand_written_optimum(problem):
-    """From the same lcvx start the phased statement plans the hand-written program's optimum through as many
-    iterations: the burn time within 1e-12, the durations within 1e-11 and the node directions within 1e-10
-    (measured at most 1.5e-13, 1.3e-12 and 1.3e-12: their convex subproblems differ, so the interior-point
-    solver's answers agree to its round-off only)."""
-    spec = load_problem(problem)
-    case = build_case(spec)
-    hand = planning_setup(spec, solve_lcvx(case, spec.discretization.grid_steps)).program
-    phased = PhasedArcsProgram(case, hand.layout.burns, hand.layout.subintervals, hand.initial_guess())
-    settings = SCPSettings.from_spec(spec.solver)
-    written, stated = solve_scp(hand, settings), solve_scp(phased, settings)
-    assert written.status == stated.status == "converged"
-    assert written.iterations == stated.iterations
-    assert stated.objective == pytest.approx(written.objective, rel=1e-12)
-    (_, dirs_a, durations_a), (_, dirs_b, durations_b) = hand.split(written.x), phased.split(stated.x)
-    np.testing.assert_allclose(durations_b, durations_a, rtol=1e-11)
-    assert np.max(np.abs(dirs_b - dirs_a)) < 1e-10
 
 
 @pytest.fixture(scope="module")

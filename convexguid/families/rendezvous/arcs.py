@@ -1,8 +1,7 @@
-"""Method ``scp_arcs``: Wang & Tang's burn/coast transcription, written by hand, solved by SCP.
+"""Method ``scp_arcs``: Wang & Tang's burn/coast transcription, solved by sequential convex programming.
 
 The maneuver is split into arcs burn - coast - burn - ... (``burns`` burn arcs); each
-burn into ``S`` equal sub-intervals. The design vector (eq. 4,
-:class:`~convexguid.families.rendezvous.arc_layout.ArcLayout`) holds the state and
+burn into ``S`` equal sub-intervals. The design vector (eq. 4) holds the state and
 the thrust direction at every node and the arc durations:
 
 .. math::
@@ -24,10 +23,6 @@ dynamics, the STM of an unknown coast duration) are linearized about the previou
 iterate by the SCP engine; the subproblem is a linear program in a trust region.
 The paper instead solves the NLP with an exterior penalty (eq. 12).
 
-The same NLP stated as a maneuver in phases on :mod:`convexguid.ocp` is
-:class:`~convexguid.families.rendezvous.arc_phases.PhasedArcsProgram` (beside this one, not yet the method's:
-its plans agree with this program's to round-off, not bit for bit).
-
 References
 ----------
 Wang H., Tang G., "Optimal finite thrust rendezvous using nonlinear programming",
@@ -36,14 +31,14 @@ J. National Univ. of Defense Technology 25(5), 2003, eqs. (4)-(11).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
 
 from convexguid.dynamics.clohessy_wiltshire import cw_stm, cw_stm_derivative
-from convexguid.families.rendezvous.arc_layout import ArcLayout, ArcsPlan
-from convexguid.families.rendezvous.case import Rendezvous
+from convexguid.families.rendezvous.case import BurnArc, Rendezvous, ThrustPlan
 from convexguid.scp.problem import (
     ConstraintBlock,
     CurvatureModel,
@@ -55,9 +50,90 @@ from convexguid.scp.problem import (
 from convexguid.transcription.hermite_simpson import hermite_simpson_defects
 
 
-class ArcsProgram(ArcsPlan):
-    """:class:`convexguid.scp.problem.NonconvexProgram` of the burn/coast transcription, written by hand (its
-    starts and readings: :class:`~convexguid.families.rendezvous.arc_layout.ArcsPlan`)."""
+@dataclass(frozen=True)
+class ArcLayout:
+    """Where each node and duration lives in the design vector (``burns`` burns, ``S`` sub-intervals each).
+
+    The arcs run in time order: burn - coast - burn - ... - burn, as in the paper, optionally preceded by a
+    ``lead_coast`` from the initial state and followed by a ``trail_coast`` to the final state (an optimum
+    whose first burn starts late or whose last burn ends early, which the paper's arcs cannot fly).
+    """
+
+    nx: int
+    nu: int
+    burns: int
+    subintervals: int
+    lead_coast: bool = False
+    trail_coast: bool = False
+
+    @property
+    def nodes_per_burn(self) -> int:
+        return self.subintervals + 1
+
+    @property
+    def num_nodes(self) -> int:
+        return self.burns * self.nodes_per_burn
+
+    @property
+    def num_arcs(self) -> int:
+        return 2 * self.burns - 1 + self.lead_coast + self.trail_coast
+
+    @property
+    def num_coasts(self) -> int:
+        return self.num_arcs - self.burns
+
+    @property
+    def node_size(self) -> int:
+        return self.nx + self.nu
+
+    @property
+    def num_variables(self) -> int:
+        return self.num_nodes * self.node_size + self.num_arcs
+
+    @property
+    def duration_offset(self) -> int:
+        return self.num_nodes * self.node_size
+
+    def split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """States ``(n, nx)``, directions ``(n, nu)`` and arc durations from the design vector."""
+        nodes = x[: self.duration_offset].reshape(self.num_nodes, self.node_size)
+        return nodes[:, : self.nx], nodes[:, self.nx:], x[self.duration_offset:]
+
+    def join(self, states: np.ndarray, directions: np.ndarray, durations: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.hstack([states, directions]).ravel(), durations])
+
+    def state_index(self, node: int) -> np.ndarray:
+        return node * self.node_size + np.arange(self.nx)
+
+    def direction_index(self, node: int) -> np.ndarray:
+        return node * self.node_size + self.nx + np.arange(self.nu)
+
+    def burn_nodes(self, burn: int) -> np.ndarray:
+        return burn * self.nodes_per_burn + np.arange(self.nodes_per_burn)
+
+    def burn_arc(self, burn: int) -> int:
+        """Index of burn ``burn``'s duration among the arc durations."""
+        return self.lead_coast + 2 * burn
+
+    def coast_arc(self, coast: int) -> int:
+        """Index of coast ``coast``'s duration (coasts counted in time order, the lead coast first)."""
+        return 2 * coast if self.lead_coast else 2 * coast + 1
+
+    def coast_ends(self, coast: int) -> tuple[int | None, int | None]:
+        """The nodes a coast leaves and reaches; None for the initial (lead coast) or final (trail coast) state."""
+        before = coast - self.lead_coast  # the burn the coast follows
+        leaves = None if before < 0 else int(self.burn_nodes(before)[-1])
+        reaches = None if before + 1 >= self.burns else int(self.burn_nodes(before + 1)[0])
+        return leaves, reaches
+
+
+END_COAST_FRACTION = 1e-3
+"""A burn of the plan followed (:meth:`ArcsProgram.following`) that starts or ends more than this fraction of the
+maneuver away from its end gets a coast arc there."""
+
+
+class ArcsProgram:
+    """:class:`convexguid.scp.problem.NonconvexProgram` of the burn/coast transcription."""
 
     def __init__(self, case: Rendezvous, burns: int, subintervals: int, guess: np.ndarray | None = None,
                  lead_coast: bool = False, trail_coast: bool = False) -> None:
@@ -84,8 +160,57 @@ class ArcsProgram(ArcsPlan):
         return ProgramSize(self.num_variables, nonlinear + lin.A.shape[0], lin.G.shape[0])
 
     def initial_guess(self) -> np.ndarray:
-        """The guess the program was made with (:meth:`following`), else :meth:`paper_guess`."""
-        return self._guess.copy() if self._guess is not None else self.paper_guess()
+        """The guess the program was made with (:meth:`following`), else the paper's kind of guess, from the
+        boundary conditions only.
+
+        Equal arc durations; states interpolated linearly in time between the boundary
+        states; every direction along the velocity change :math:`v_f - v_0`.
+        """
+        if self._guess is not None:
+            return self._guess.copy()
+        case, lay = self.case, self.layout
+        durations = np.full(lay.num_arcs, case.duration / lay.num_arcs)
+        times = self.node_times(durations)
+        s = ((times - case.t0) / case.duration)[:, None]
+        states = (1 - s) * case.x0 + s * case.xf
+        dv = case.xf[case.nu:] - case.x0[case.nu:]
+        direction = dv / np.linalg.norm(dv) if np.linalg.norm(dv) > 0 else np.eye(case.nu)[0]
+        return lay.join(states, np.tile(direction, (lay.num_nodes, 1)), durations)
+
+    def following(self, burns: tuple[BurnArc, ...], thrust: ThrustPlan, states_at) -> ArcsProgram:
+        """A program of as many burns as another plan (the ``lcvx`` optimum), started from its burn structure.
+
+        The burn arcs take the plan's burn durations and the coasts the gaps between them; a first burn that
+        starts later, or a last one that ends earlier, than :data:`END_COAST_FRACTION` of the maneuver from its
+        end gets a lead or trail coast. The nodes take the plan's states at their times (``states_at(times)``,
+        the flown plan) and the direction of its thrust, or of the nearest burn's middle where it is off.
+        """
+        case = self.case
+        slack = END_COAST_FRACTION * case.duration
+        lead, trail = burns[0].start_s - case.t0 > slack, case.tf - burns[-1].end_s > slack
+        lay = ArcLayout(case.nx, case.nu, len(burns), self.layout.subintervals, lead, trail)
+        durations = np.empty(lay.num_arcs)
+        durations[[lay.burn_arc(b) for b in range(lay.burns)]] = [b.duration_s for b in burns]
+        gaps = [max(b.start_s - a.end_s, 0.0) for a, b in zip(burns[:-1], burns[1:], strict=True)]
+        gaps = [burns[0].start_s - case.t0] * lead + gaps + [case.tf - burns[-1].end_s] * trail
+        durations[[lay.coast_arc(c) for c in range(lay.num_coasts)]] = gaps
+        spare = case.duration - durations.sum()  # the ends left without a coast, shared by the coasts
+        if lay.num_coasts:
+            durations[[lay.coast_arc(c) for c in range(lay.num_coasts)]] += spare / lay.num_coasts
+        else:
+            durations[0] += spare
+        program = ArcsProgram(case, lay.burns, lay.subintervals, None, lead, trail)
+        times = program.node_times(durations)
+        middles = np.array([0.5 * (b.start_s + b.end_s) for b in burns])
+        directions = np.empty((times.size, lay.nu))
+        for k, t in enumerate(times):
+            u = thrust(t)
+            if np.linalg.norm(u) < 1e-6:
+                u = thrust(middles[np.argmin(np.abs(middles - t))])
+            norm = np.linalg.norm(u)
+            directions[k] = u / norm if norm > 0 else np.eye(lay.nu)[0]
+        program._guess = lay.join(states_at(times), directions, durations)
+        return program
 
     def variable_scale(self) -> np.ndarray:
         """Position, velocity, direction and duration scales (the trust region is a box in these units)."""
@@ -249,3 +374,52 @@ class ArcsProgram(ArcsPlan):
         _, dirs, _ = self.layout.split(x)
         return self._block("unit_thrust_direction", np.sum(dirs**2, axis=1) - 1.0,
                            (2 * dirs).ravel() if jacobians else None)
+
+    # --- reading a solution ----------------------------------------------------------------------
+    def node_times(self, durations: np.ndarray) -> np.ndarray:
+        """Time of every node: burn nodes equally spaced over their arc."""
+        lay, starts = self.layout, self._arc_starts(durations)
+        return np.concatenate([starts[lay.burn_arc(b)] + np.linspace(0.0, durations[lay.burn_arc(b)],
+                                                                       lay.nodes_per_burn)
+                               for b in range(lay.burns)])
+
+    def _arc_starts(self, durations: np.ndarray) -> np.ndarray:
+        return self.case.t0 + np.concatenate([[0.0], np.cumsum(durations)[:-1]])
+
+    def burn_arcs(self, x: np.ndarray) -> tuple[BurnArc, ...]:
+        lay = self.layout
+        _, _, durations = lay.split(x)
+        starts = self._arc_starts(durations)
+        return tuple(BurnArc(float(starts[lay.burn_arc(b)]), float(starts[lay.burn_arc(b)]
+                                                                    + durations[lay.burn_arc(b)]))
+                     for b in range(lay.burns))
+
+    def thrust_plan(self, x: np.ndarray) -> ThrustPlan:
+        """The engine's command: full thrust along the interpolated, normalized node direction on burns.
+
+        The transcription interpolates the direction linearly (eq. 6), whose norm dips
+        slightly below 1 between nodes; a constant-thrust engine flies its unit vector,
+        which is what the verification propagates.
+        """
+        _, dirs, durations = self.layout.split(x)
+        return ThrustPlan.from_nodes(self.node_times(durations), dirs, self.burn_arcs(x), normalize=True)
+
+    def refined(self, x: np.ndarray, subintervals: int) -> tuple[ArcsProgram, np.ndarray]:
+        """The same transcription with ``subintervals`` per burn, and ``x`` carried over as its start.
+
+        Arc durations are kept; states and directions are interpolated linearly in time inside
+        each burn (directions renormalised).
+        """
+        finer = ArcsProgram(self.case, self.layout.burns, subintervals, None, self.layout.lead_coast,
+                            self.layout.trail_coast)
+        lay, new = self.layout, finer.layout
+        states, dirs, durations = lay.split(x)
+        old_s = np.linspace(0.0, 1.0, lay.nodes_per_burn)
+        new_s = np.linspace(0.0, 1.0, new.nodes_per_burn)
+        new_states, new_dirs = [], []
+        for b in range(lay.burns):
+            nodes = lay.burn_nodes(b)
+            new_states.append(np.column_stack([np.interp(new_s, old_s, col) for col in states[nodes].T]))
+            d = np.column_stack([np.interp(new_s, old_s, col) for col in dirs[nodes].T])
+            new_dirs.append(d / np.linalg.norm(d, axis=1, keepdims=True))
+        return finer, new.join(np.vstack(new_states), np.vstack(new_dirs), durations)

@@ -146,7 +146,7 @@ def _scp_row(program: ArcsProgram, settings: SCPSettings, repeat: int) -> Rendez
 
 def _ipopt_row(program: ArcsProgram, repeat: int) -> RendezvousBenchRow:
     """IPOPT on the arcs NLP from the program's initial guess; ``setup s`` is the fastest model build."""
-    x0 = program.design_vector(program.initial_guess())
+    x0 = program.initial_guess()
 
     def row(best, runs) -> RendezvousBenchRow:
         ok, message = ipopt_outcome(best)

@@ -137,21 +137,19 @@ def planning_setup(spec, lcvx: RendezvousPlan | None = None) -> PlanningSetup:
         lcvx = solve_lcvx(case, disc.grid_steps, spec.solver.backend)
     usable = lcvx is not None and lcvx.status == "converged" and lcvx.burns
     burns = (len(lcvx.burns) if usable else DEFAULT_BURNS) if disc.auto_burns else disc.burns
+    program = ArcsProgram(case, burns, disc.subintervals_per_burn)
     if usable and len(lcvx.burns) == burns:
         flown = propagate_thrust(case, lcvx.thrust, spec.verification.grid_points, spec.verification.rtol,
                                  spec.verification.atol)
-        program = ArcsProgram.following(case, disc.subintervals_per_burn, lcvx.burns, lcvx.thrust, lambda times:
-                                        np.column_stack([np.interp(times, flown.t, column)
-                                                         for column in flown.states.T]))
-    else:
-        program = ArcsProgram(case, burns, disc.subintervals_per_burn)
+        program = program.following(lcvx.burns, lcvx.thrust, lambda times: np.column_stack(
+            [np.interp(times, flown.t, column) for column in flown.states.T]))
     return PlanningSetup(program, SCPSettings.from_spec(spec.solver), ArcsChecker(case, spec.verification))
 
 
 def _solve_arcs(case: Rendezvous, spec, lcvx: RendezvousPlan | None, log) -> tuple[RendezvousPlan, list, object]:
     outcome = planning_setup(spec, lcvx).solve(log)
     program, result = outcome.program, outcome.result
-    states, dirs, durations = program.split(result.x)
+    states, dirs, durations = program.layout.split(result.x)
     times = program.node_times(durations)
     nodes = Trajectory(times, state_columns(case.dim, states, dirs, case.accel))
     burns = program.burn_arcs(result.x)
