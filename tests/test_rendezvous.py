@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -12,13 +13,12 @@ from scipy.linalg import expm
 
 from convexguid.api import solve
 from convexguid.cli import main
-from convexguid.dynamics.clohessy_wiltshire import cw_matrices, cw_stm, cw_stm_derivative, cw_zoh
+from convexguid.dynamics.clohessy_wiltshire import cw_matrices, cw_stm, cw_stm_casadi, cw_zoh
 from convexguid.errors import SpecError
-from convexguid.families.rendezvous.arcs import ArcsProgram
+from convexguid.families.rendezvous.arc_phases import PhasedArcsProgram
 from convexguid.families.rendezvous.case import build_case
 from convexguid.families.rendezvous.lcvx import burn_structure, solve_lcvx
 from convexguid.problem_files import load_problem
-from convexguid.transcription.hermite_simpson import hermite_simpson_defects
 
 PAPER = Path(__file__).parent.parent / "problems" / "wang2003_rendezvous.yaml"
 SPACE = Path(__file__).parent.parent / "problems" / "wang2003_rendezvous_3d.yaml"
@@ -34,10 +34,12 @@ def test_stm_matches_matrix_exponential(dim, dt):
     assert np.allclose(cw_stm(N, dt, dim), expm(A * dt), rtol=1e-12, atol=1e-12 * max(1.0, dt))
 
 
-def test_stm_derivative_is_a_times_stm():
-    h = 1e-30
-    numeric = np.imag(cw_stm(N, 123.0 + 1j * h, 3)) / h
-    assert np.allclose(cw_stm_derivative(N, 123.0, 3), numeric, rtol=1e-12, atol=1e-15)
+@pytest.mark.parametrize("dim", [2, 3])
+def test_casadi_stm_is_the_numpy_one(dim):
+    duration = ca.SX.sym("t")
+    stm = ca.Function("stm", [duration], [cw_stm_casadi(N, duration, dim)])
+    for dt in (0.5, 600.0, 5400.0):
+        assert np.array_equal(np.asarray(stm(dt)), cw_stm(N, dt, dim))
 
 
 def test_zoh_matches_integration_with_constant_thrust():
@@ -49,54 +51,6 @@ def test_zoh_matches_integration_with_constant_thrust():
     assert np.allclose(phi @ x0 + gam @ u, ref, rtol=1e-10, atol=1e-9)
 
 
-def _pendulum(x, u):
-    return np.column_stack([x[:, 1], -np.sin(x[:, 0]) + u[:, 0]])
-
-
-def _pendulum_jac(x, u):
-    F = np.zeros((x.shape[0], 2, 2))
-    F[:, 0, 1] = 1.0
-    F[:, 1, 0] = -np.cos(x[:, 0])
-    G = np.zeros((x.shape[0], 2, 1))
-    G[:, 1, 0] = 1.0
-    return F, G
-
-
-def test_hermite_simpson_jacobians_match_finite_differences():
-    rng = np.random.default_rng(1)
-    args = [rng.normal(size=(3, 2)), rng.normal(size=(3, 1)), rng.normal(size=(3, 2)), rng.normal(size=(3, 1)),
-            np.array([0.3, 0.7, 1.1])]
-    hs = hermite_simpson_defects(_pendulum, _pendulum_jac, *args)
-    eps = 1e-6
-    for index, analytic in zip(range(5), (hs.d_x0, hs.d_u0, hs.d_x1, hs.d_u1, hs.d_h[:, :, None]), strict=True):
-        width = 1 if index == 4 else args[index].shape[1]
-        for j in range(width):
-            plus = [a.copy() for a in args]
-            minus = [a.copy() for a in args]
-            if index == 4:
-                plus[4] += eps
-                minus[4] -= eps
-            else:
-                plus[index][:, j] += eps
-                minus[index][:, j] -= eps
-            numeric = (hermite_simpson_defects(_pendulum, _pendulum_jac, *plus).values
-                       - hermite_simpson_defects(_pendulum, _pendulum_jac, *minus).values) / (2 * eps)
-            assert np.allclose(analytic[:, :, j], numeric, atol=1e-7)
-
-
-def test_hermite_simpson_defect_is_fourth_order_on_free_motion():
-    A, _ = cw_matrices(N, 0.5, 2)
-    x0 = np.array([[15000.0, -500.0, -100.0, 10.0]])
-    errors = []
-    for h in (40.0, 20.0):
-        x1 = (cw_stm(N, h, 2) @ x0[0])[None]
-        hs = hermite_simpson_defects(lambda x, u: x @ A.T, lambda x, u: (np.broadcast_to(A, (1, 4, 4)),
-                                                                          np.zeros((1, 4, 1))),
-                                     x0, np.zeros((1, 1)), x1, np.zeros((1, 1)), np.array([h]))
-        errors.append(np.abs(hs.values).max())
-    assert errors[0] / errors[1] > 25  # local error O(h^5): halving h divides it by ~32
-
-
 # --- the paper's NLP -------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -104,14 +58,35 @@ def paper_case():
     return build_case(load_problem(PAPER))
 
 
+def test_burn_defects_are_fourth_order(paper_case):
+    """Hermite-Simpson (eqs. 5-8) on a burn flown exactly along a constant direction: halving the sub-intervals
+    divides the defects by about 32 (local error O(h^5))."""
+    direction, duration, errors = np.array([0.6, -0.8]), 200.0, []
+    for subintervals in (4, 8):
+        program = PhasedArcsProgram(paper_case, 2, subintervals)
+        states, directions, durations = (part.copy() for part in program.layout.split(program.paper_guess()))
+        phi, gamma = cw_zoh(N, paper_case.accel, duration / subintervals, 2)
+        nodes = program.layout.burn_nodes(0)
+        for previous, k in zip(nodes[:-1], nodes[1:], strict=True):
+            states[k] = phi @ states[previous] + gamma @ direction
+        directions[nodes], durations[0] = direction, duration
+        z = program.from_design_vector(program.layout.join(states, directions, durations))
+        defects = next(b for b in program.evaluate(z, False).equalities if b.name == "burn1: dynamics_defects")
+        errors.append(np.abs(defects.values).max())
+    assert errors[0] / errors[1] > 25
+
+
 def test_nlp_dimensions_are_the_papers(paper_case):
-    size = ArcsProgram(paper_case, 2, 12).size()
+    size = PhasedArcsProgram(paper_case, 2, 12).size()
     assert (size.num_variables, size.num_equality_constraints, size.num_inequality_constraints) == (159, 135, 3)
+    space = build_case(load_problem(SPACE))
+    size = PhasedArcsProgram(space, 2, 12).size()
+    assert (size.num_variables, size.num_equality_constraints, size.num_inequality_constraints) == (237, 189, 3)
 
 
 @pytest.mark.parametrize("coasts", [(False, False), (True, True)], ids=["paper", "lead-and-trail-coasts"])
 def test_arcs_jacobians_match_finite_differences(paper_case, coasts):
-    program = ArcsProgram(paper_case, 2, 4, None, *coasts)
+    program = PhasedArcsProgram(paper_case, 2, 4, None, *coasts)
     rng = np.random.default_rng(0)
     x = program.initial_guess() + 0.01 * program.variable_scale() * rng.normal(size=program.num_variables)
     ev = program.evaluate(x)

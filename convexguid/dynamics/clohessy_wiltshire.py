@@ -93,12 +93,6 @@ def cw_stm_casadi(mean_motion: float, dt, dim: int = 3):
     return ca.vertcat(*(ca.horzcat(*(ca.SX(rows[i][j]) for j in keep)) for i in keep))
 
 
-def cw_stm_derivative(mean_motion: float, dt: float, dim: int = 3) -> np.ndarray:
-    """:math:`d\\Phi/d\\Delta t = A\\,\\Phi(\\Delta t)` (the coast-arc Jacobian with respect to its duration)."""
-    A, _ = cw_matrices(mean_motion, 1.0, dim)
-    return A @ cw_stm(mean_motion, dt, dim)
-
-
 def cw_zoh(mean_motion: float, accel: float, dt: float, dim: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """Exact zero-order-hold discretization :math:`X_{k+1} = \\Phi X_k + \\Gamma u_k` over a step ``dt``.
 

@@ -1,9 +1,10 @@
 """Family ``rendezvous``: finite-thrust minimum-burn-time rendezvous in Clohessy-Wiltshire dynamics (Wang & Tang 2003).
 
-Modules: ``spec`` (problem file), ``figures`` (summary figures), ``case`` (problem data, thrust plans,
-propagation, verification), ``arcs`` (the paper's burn/coast NLP for the SCP), ``lcvx`` (lossless
-convexification, one SOCP), ``solve`` (either method, verification, certificate, summary), ``plots``,
-``reference`` (CasADi/IPOPT on the arcs NLP) and ``bench`` (lcvx vs scp_arcs vs IPOPT).
+Modules: ``spec`` (problem file), ``figures`` (summary figures), ``case`` (problem data, thrust plans, propagation,
+verification), ``arc_layout`` (the arcs' design vector, their starts and readings), ``arc_phases`` (the paper's
+burn/coast NLP for the SCP, a maneuver in phases on ``convexguid.ocp``), ``lcvx`` (lossless convexification, one
+SOCP), ``solve`` (either method, verification, certificate, summary), ``plots``, ``reference`` (CasADi/IPOPT on the
+arcs NLP) and ``bench`` (lcvx vs scp_arcs vs IPOPT).
 """
 
 from __future__ import annotations

@@ -8,9 +8,9 @@ In one run, each method solves the problem ``repeat`` times and the fastest run 
 - ``lcvx (cvxpy statement)``: the same SOCP stated uncondensed in cvxpy
   (:func:`convexguid.families.rendezvous.lcvx_reference.solve_lcvx_cvxpy`), solved by cvxpy's Clarabel
   interface: an independent cross-check of the hand-condensed program; its ``setup s`` is cvxpy's compile time;
-- ``scp_arcs``: Wang & Tang's burn/coast NLP (:class:`~convexguid.families.rendezvous.arcs.ArcsProgram`)
+- ``scp_arcs``: Wang & Tang's burn/coast NLP (:class:`~convexguid.families.rendezvous.arc_phases.PhasedArcsProgram`)
   by the SCP engine (:func:`convexguid.scp.engine.solve_scp`) with the problem's solver settings,
-  from :meth:`ArcsProgram.initial_guess`;
+  from the paper's kind of guess (:meth:`~convexguid.families.rendezvous.arc_layout.ArcsPlan.paper_guess`);
 - ``ipopt``: the same NLP, written independently in CasADi and solved by IPOPT with exact
   Hessians (:func:`convexguid.families.rendezvous.reference.solve_rendezvous_arcs_ipopt`) from the same initial
   guess, when ``casadi`` is installed.
@@ -44,7 +44,7 @@ from convexguid.bench_common import (
     one_line,
     timed_method,
 )
-from convexguid.families.rendezvous.arcs import ArcsProgram
+from convexguid.families.rendezvous.arc_phases import PhasedArcsProgram
 from convexguid.families.rendezvous.case import Rendezvous, RendezvousPlan, build_case
 from convexguid.families.rendezvous.lcvx import solve_lcvx
 from convexguid.families.rendezvous.lcvx_reference import solve_lcvx_cvxpy
@@ -133,7 +133,7 @@ def _lcvx_cvxpy_row(case: Rendezvous, steps: int, repeat: int) -> RendezvousBenc
                         _failed(LCVX_CVXPY))
 
 
-def _scp_row(program: ArcsProgram, settings: SCPSettings, repeat: int) -> RendezvousBenchRow:
+def _scp_row(program: PhasedArcsProgram, settings: SCPSettings, repeat: int) -> RendezvousBenchRow:
     """``scp_arcs`` from the program's initial guess."""
     def row(r, _) -> RendezvousBenchRow:
         ok = r.status == "converged"
@@ -144,9 +144,9 @@ def _scp_row(program: ArcsProgram, settings: SCPSettings, repeat: int) -> Rendez
                         _failed("scp_arcs"))
 
 
-def _ipopt_row(program: ArcsProgram, repeat: int) -> RendezvousBenchRow:
+def _ipopt_row(program: PhasedArcsProgram, repeat: int) -> RendezvousBenchRow:
     """IPOPT on the arcs NLP from the program's initial guess; ``setup s`` is the fastest model build."""
-    x0 = program.initial_guess()
+    x0 = program.design_vector(program.initial_guess())
 
     def row(best, runs) -> RendezvousBenchRow:
         ok, message = ipopt_outcome(best)
@@ -186,7 +186,7 @@ def bench_rendezvous_rows(spec, repeat: int,
     case = build_case(spec)
     disc, s = spec.discretization, spec.solver
     burns = planning_setup(spec).program.layout.burns if disc.auto_burns else disc.burns
-    program = ArcsProgram(case, burns, disc.subintervals_per_burn)  # both from the paper's kind of guess
+    program = PhasedArcsProgram(case, burns, disc.subintervals_per_burn)  # both from the paper's kind of guess
     settings = SCPSettings.from_spec(s)
     rows = [_lcvx_row(case, disc.grid_steps, s.backend, repeat), _lcvx_cvxpy_row(case, disc.grid_steps, repeat),
             _scp_row(program, settings, repeat)]

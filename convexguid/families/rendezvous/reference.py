@@ -2,7 +2,7 @@
 
 The nonlinear program of :mod:`convexguid.families.rendezvous.arcs` (Wang & Tang 2003,
 eqs. 4-11) is solved once more with CasADi + IPOPT (exact Hessians). Only the variable
-*layout* (:class:`~convexguid.families.rendezvous.arcs.ArcLayout`), the constant matrices
+*layout* (:class:`~convexguid.families.rendezvous.arc_layout.ArcLayout`), the constant matrices
 :math:`A, B` of eq. (2) (:func:`~convexguid.dynamics.clohessy_wiltshire.cw_matrices`) and the
 numeric initial guess are shared with the SCP code. The Hermite-Simpson defects, the
 Clohessy-Wiltshire free motion of the coast arcs and the unit-direction constraints are
@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from convexguid.dynamics.clohessy_wiltshire import cw_matrices
-from convexguid.families.rendezvous.arcs import ArcLayout, ArcsProgram
+from convexguid.families.rendezvous.arc_layout import ArcLayout, ArcsPlan
 from convexguid.families.rendezvous.case import Rendezvous
 from convexguid.reference import ReferenceResult
 
@@ -146,17 +146,18 @@ def _design_scale(case: Rendezvous, layout: ArcLayout) -> np.ndarray:
     return np.concatenate([np.tile(node, layout.num_nodes), np.full(layout.num_arcs, case.duration)])
 
 
-def solve_rendezvous_arcs_ipopt(program: ArcsProgram, x0: np.ndarray | None = None, tol: float = 1e-10,
+def solve_rendezvous_arcs_ipopt(program: ArcsPlan, x0: np.ndarray | None = None, tol: float = 1e-10,
                                 max_iter: int = 3000) -> ArcsReferenceResult:
     """Solve the burn/coast NLP of ``program`` with CasADi + IPOPT (exact Hessian) from ``x0``.
 
     Parameters
     ----------
-    program : ArcsProgram
-        Supplies the case, the variable layout (burns, sub-intervals per burn) and the default
-        initial guess; its constraint and Jacobian code is not used.
+    program : ArcsPlan
+        The arcs' program (:class:`~convexguid.families.rendezvous.arc_phases.PhasedArcsProgram`): supplies the
+        case, the variable layout (burns, sub-intervals per burn) and the default initial guess; its constraint
+        and Jacobian code is not used.
     x0 : numpy.ndarray, optional
-        Initial design vector in SI units; default :meth:`ArcsProgram.initial_guess` (equal arc
+        Initial design vector in SI units; default the program's initial guess (the paper's: equal arc
         durations, states linear in time, directions along :math:`v_f - v_0`).
     tol : float, optional
         IPOPT's ``tol`` on the scaled NLP error, default ``1e-10``.
@@ -217,7 +218,7 @@ def solve_rendezvous_arcs_ipopt(program: ArcsProgram, x0: np.ndarray | None = No
                        options)
     setup = time.perf_counter() - start
 
-    guess = program.initial_guess() if x0 is None else np.asarray(x0, dtype=float)
+    guess = program.design_vector(program.initial_guess()) if x0 is None else np.asarray(x0, dtype=float)
     start = time.perf_counter()
     sol = solver(x0=guess / scale, lbx=lbz, ubx=np.inf, lbg=0.0, ubg=0.0)
     wall = time.perf_counter() - start

@@ -11,7 +11,7 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from convexguid.families.rendezvous.arcs import ArcsProgram
+from convexguid.families.rendezvous.arc_phases import PhasedArcsProgram
 from convexguid.families.rendezvous.case import (
     BurnArc,
     Rendezvous,
@@ -42,7 +42,7 @@ def solve_rendezvous(spec, log: Callable[[IterationRecord], None] | None = None,
     ``planner`` is unused (the family hook's signature: this family plans no other problem file).
 
     ``scp_arcs`` with the ``lcvx`` solution at hand (``certify``, or ``burns: auto``) starts from its burn
-    structure when the numbers of burns agree (:meth:`ArcsProgram.following`): the convex optimum on the grid
+    structure when the numbers of burns agree (:meth:`PhasedArcsProgram.following`): the convex optimum on the grid
     is global, so the arcs then polish it instead of searching from the boundary conditions alone.
     """
     start = time.perf_counter()
@@ -105,12 +105,12 @@ class ArcsChecker:
     def __init__(self, case: Rendezvous, settings) -> None:
         self.case, self.settings = case, settings
 
-    def check(self, program: ArcsProgram, x: np.ndarray) -> Check:
+    def check(self, program: PhasedArcsProgram, x: np.ndarray) -> Check:
         s = self.settings
         track = propagate_thrust(self.case, program.thrust_plan(x), s.grid_points, s.rtol, s.atol)
         return Check(verify_track(self.case, track, s), track)
 
-    def repair(self, program: ArcsProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None:
+    def repair(self, program: PhasedArcsProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None:
         errors, s = check.verification.final_errors, self.settings
         excess = max(errors["final_position_error_m"] / s.final_position_tol_m,
                      errors["final_velocity_error_mps"] / s.final_velocity_tol_mps)
@@ -137,19 +137,21 @@ def planning_setup(spec, lcvx: RendezvousPlan | None = None) -> PlanningSetup:
         lcvx = solve_lcvx(case, disc.grid_steps, spec.solver.backend)
     usable = lcvx is not None and lcvx.status == "converged" and lcvx.burns
     burns = (len(lcvx.burns) if usable else DEFAULT_BURNS) if disc.auto_burns else disc.burns
-    program = ArcsProgram(case, burns, disc.subintervals_per_burn)
     if usable and len(lcvx.burns) == burns:
         flown = propagate_thrust(case, lcvx.thrust, spec.verification.grid_points, spec.verification.rtol,
                                  spec.verification.atol)
-        program = program.following(lcvx.burns, lcvx.thrust, lambda times: np.column_stack(
-            [np.interp(times, flown.t, column) for column in flown.states.T]))
+        program = PhasedArcsProgram.following(case, disc.subintervals_per_burn, lcvx.burns, lcvx.thrust,
+                                              lambda times: np.column_stack([np.interp(times, flown.t, column)
+                                                                             for column in flown.states.T]))
+    else:
+        program = PhasedArcsProgram(case, burns, disc.subintervals_per_burn)
     return PlanningSetup(program, SCPSettings.from_spec(spec.solver), ArcsChecker(case, spec.verification))
 
 
 def _solve_arcs(case: Rendezvous, spec, lcvx: RendezvousPlan | None, log) -> tuple[RendezvousPlan, list, object]:
     outcome = planning_setup(spec, lcvx).solve(log)
     program, result = outcome.program, outcome.result
-    states, dirs, durations = program.layout.split(result.x)
+    states, dirs, durations = program.split(result.x)
     times = program.node_times(durations)
     nodes = Trajectory(times, state_columns(case.dim, states, dirs, case.accel))
     burns = program.burn_arcs(result.x)
