@@ -109,6 +109,10 @@ def test_a_statement_in_phases_is_refused_with_one_line():
         plan.link("bad", stray)
     with pytest.raises(SpecError, match=r"a: start\(t\): expected a state of this problem"):
         first.start(first.time)
+    # phases each within the size limit, together above it: one line, before anything is transcribed
+    with pytest.raises(SpecError, match=r"two-burn-orbit-raise: burn1.transcription.intervals: problem too large: "
+                                        r"a run needs about 3.\d+ GiB of memory \(3 phases"):
+        _example("two_burn_orbit_raise").build(intervals=8000).check()
     unflowed, _ = _leg("d", start=0.0, end=1.0)
     unflowed.transcription(1, "flow")
     with pytest.raises(SpecError, match=r"d: transcription: method 'flow' needs the flow of every state; none given "

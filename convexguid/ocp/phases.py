@@ -30,6 +30,7 @@ import numpy as np
 
 from convexguid.errors import SpecError
 from convexguid.ocp.problem import Problem
+from convexguid.ocp.size import check_phases_size
 
 
 class Phases:
@@ -106,6 +107,7 @@ class Phases:
         """Refuse a statement that cannot be solved, one line naming what is wrong."""
         for p in self.phases:
             p.check()
+        check_phases_size(self.name, self.phases)
         if all(p.objective is None for p in self.phases):
             raise SpecError(f"{self.name}: objective: no phase states one; give one phase (or several: they add up) "
                             "minimize_time(), minimize_energy(), minimize_fuel() or minimize_terminal(...)")

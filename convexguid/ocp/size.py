@@ -53,3 +53,15 @@ def estimate_size(problem: Problem) -> SizeEstimate:
 def check_problem_size(problem: Problem, limit_bytes: float = DEFAULT_MEMORY_LIMIT_BYTES) -> None:
     """Refuse ``problem`` with one line if its estimate is above ``limit_bytes``."""
     check_size(problem.name, "ocp", estimate_size(problem), limit_bytes)
+
+
+def check_phases_size(name: str, phases: list[Problem], limit_bytes: float = DEFAULT_MEMORY_LIMIT_BYTES) -> None:
+    """Refuse a maneuver in phases with one line if its phases together are above ``limit_bytes`` (one process
+    holds them all; each phase alone was checked by its own :meth:`~convexguid.ocp.problem.Problem.check`)."""
+    estimates = [estimate_size(p) for p in phases]
+    largest = max(range(len(phases)), key=lambda i: estimates[i].memory_bytes)
+    total = PROCESS_BYTES + sum(e.memory_bytes - PROCESS_BYTES for e in estimates)
+    check_size(name, "ocp", SizeEstimate(total, f"{phases[largest].name}.transcription.intervals",
+                                         estimates[largest].value,
+                                         f"{len(phases)} phases, the largest {estimates[largest].basis}",
+                                         estimates[largest].fix), limit_bytes)
