@@ -13,7 +13,7 @@ from convexguid.dynamics.rigid_body import rigid_body_rhs, rigid_body_rhs_fast
 from convexguid.dynamics.torque import LinearTorque, TorqueCommand
 from convexguid.families.flat_attitude.solve import planning_setup, torque_command, verify_plan
 from convexguid.families.quaternion_attitude.path_transfer import multicone_scenario, plan_path_transfer
-from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_start
+from convexguid.families.quaternion_attitude.program import eigenaxis_start, transcribe_slew
 from convexguid.families.quaternion_attitude.solve import build_case
 from convexguid.problem_files import load_problem
 from convexguid.rotations import euler321_to_quat, quat_angle_between
@@ -67,8 +67,8 @@ def kinked_plan():
     case = build_case(load_problem(PROBLEMS / "wang_multicone_time.yaml"))
     guess, tf = eigenaxis_start(case, 12)
     guess[:, 7:] += 0.3 * np.max(case.torque_max) * np.random.default_rng(5).standard_normal((13, 3))
-    program = QuaternionProgram(case, 12, guess, tf)
-    return case, program.torque_command(program.initial_guess()), tf
+    slew = transcribe_slew(case, 12, guess, tf)
+    return case, slew.torque_command(slew.program.initial_guess()), tf
 
 
 def test_piecewise_propagation_matches_tight_reference(kinked_plan):

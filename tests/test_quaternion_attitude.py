@@ -10,7 +10,7 @@ import pytest
 
 from convexguid.api import _spec, solve
 from convexguid.errors import SpecError
-from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_start
+from convexguid.families.quaternion_attitude.program import Slew, eigenaxis_start, transcribe_slew
 from convexguid.families.quaternion_attitude.solve import build_case, scp_settings
 from convexguid.problem_files import load_problem
 from convexguid.rotations import quat_sign_continuous
@@ -22,18 +22,19 @@ MULTICONE = PROBLEMS / "wang_multicone_time.yaml"
 GUO = PROBLEMS / "guo2011_scp_time.yaml"
 
 
-def _program(path: Path, intervals: int, overrides=(), tf: float | None = None) -> tuple[QuaternionProgram, object]:
+def _slew(path: Path, intervals: int, overrides=(), tf: float | None = None) -> tuple[Slew, float, object]:
+    """The slew from its eigenaxis start, that start's duration and the spec."""
     spec = _spec(path, list(overrides))
     case = build_case(spec)
     if tf is not None:
         case = replace(case, tf=tf)
     guess, tf0 = eigenaxis_start(case, intervals)
-    return QuaternionProgram(case, intervals, guess, tf0), spec
+    return transcribe_slew(case, intervals, guess, tf0), tf0, spec
 
 
 @pytest.mark.parametrize("path,tf", [(MULTICONE, None), (GUO, 150.0)])
 def test_jacobians_match_finite_differences(path, tf):
-    program, _ = _program(path, 8, tf=tf)
+    program = _slew(path, 8, tf=tf)[0].program
     rng = np.random.default_rng(3)
     x = program.initial_guess() + 1e-2 * rng.standard_normal(program.num_variables) * program.variable_scale()
     ev = program.evaluate(x)
@@ -51,15 +52,14 @@ def test_min_time_matches_ipopt_on_the_same_nlp():
     pytest.importorskip("casadi")
     from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt
 
-    program, spec = _program(MULTICONE, 20)
-    result = solve_scp(program, scp_settings(spec.solver))
+    slew, tf_guess, spec = _slew(MULTICONE, 20)
+    result = solve_scp(slew.program, scp_settings(spec.solver))
     assert result.status == "converged"
-    ref = solve_quaternion_attitude_ipopt(program.case, 20, program.nodes(program.initial_guess()),
-                                          program.objective_scale)
+    ref = solve_quaternion_attitude_ipopt(slew.case, 20, slew.nodes(slew.program.initial_guess()), tf_guess)
     assert ref.success
     assert abs(result.objective - ref.objective) <= 1e-3 * ref.objective
     # and it beats the eigenaxis guess's duration, which breaks two cones
-    assert result.objective < program.objective_scale
+    assert result.objective < tf_guess
 
 
 def test_minimum_time_plan_is_verified_and_meets_every_cone():

@@ -17,10 +17,10 @@ from convexguid.api import solve
 from convexguid.errors import SpecError
 from convexguid.families.quaternion_attitude.program import (
     AttitudeCase,
-    QuaternionProgram,
     eigenaxis_guess,
     eigenaxis_start,
     eigenaxis_time_guess,
+    transcribe_slew,
 )
 from convexguid.families.quaternion_attitude.solve import build_case, path_transfer_problem, scp_settings
 from convexguid.problem_files import load_problem
@@ -103,7 +103,7 @@ def test_a_single_bound_becomes_three_and_dumps_as_given():
 def test_program_rows_and_scales_are_per_axis():
     case = build_case(load_problem(FENG))
     guess, tf = eigenaxis_start(case, 6)
-    program = QuaternionProgram(case, 6, guess, tf)
+    program = transcribe_slew(case, 6, guess, tf).program
     torques = slice(program.control_start, program.slack_start)  # the node torques, node by node
     np.testing.assert_array_equal(program.variable_scale()[torques].reshape(7, 3), np.tile(FENG_BOX, (7, 1)))
     lin = program.linear_constraints()
@@ -192,7 +192,8 @@ def test_energy_matches_ipopt_on_the_same_transcription(overrides):
     spec = load_problem(FENG, overrides)
     case, intervals = build_case(spec), spec.discretization.intervals
     guess, tf = eigenaxis_start(case, intervals)
-    program = QuaternionProgram(case, intervals, guess, tf)
+    slew = transcribe_slew(case, intervals, guess, tf)
+    program = slew.program
     result = solve_scp(program, scp_settings(spec.solver))
     assert result.status == "converged"
     ref = solve_quaternion_attitude_ipopt(case, intervals, guess, tf)
@@ -202,7 +203,7 @@ def test_energy_matches_ipopt_on_the_same_transcription(overrides):
     assert abs(result.objective - ref.objective) <= 5e-3 * ref.objective
     lin = program.linear_constraints()
     # IPOPT's optimum meets the per-axis rows of the family's program
-    assert np.max(lin.G @ program.from_node_rows(ref.x) - lin.h) < 1e-7
+    assert np.max(lin.G @ slew.from_node_rows(ref.x) - lin.h) < 1e-7
 
 
 def test_torque_plot_draws_each_axis_bound(nominal, tmp_path, monkeypatch):

@@ -3,7 +3,7 @@
 The IPOPT reference (:mod:`convexguid.families.quaternion_attitude.reference`) writes the rigid-body dynamics,
 the Hermite-Simpson defects, the cone cosines and the forbidden-attitude rows again in CasADi;
 its optima must satisfy the numpy transcription's constraints
-(:class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`), respect bounds that
+(:func:`~convexguid.families.quaternion_attitude.program.transcribe_slew`), respect bounds that
 hold for any feasible slew, and clear every cone of the multi-cone scenario of docs/parameters.md.
 """
 
@@ -20,9 +20,10 @@ pytest.importorskip("casadi")
 from convexguid.families.quaternion_attitude.program import (  # noqa: E402
     AttitudeCase,
     Forbidden,
-    QuaternionProgram,
+    Slew,
     cone_cosine,
     eigenaxis_start,
+    transcribe_slew,
 )
 from convexguid.families.quaternion_attitude.reference import solve_quaternion_attitude_ipopt  # noqa: E402
 from convexguid.families.quaternion_attitude.solve import build_case  # noqa: E402
@@ -45,10 +46,10 @@ def _rest_to_rest(inertia: np.ndarray, angle: float = np.pi / 2, **extra) -> Att
                         np.zeros(3), **extra)
 
 
-def _assert_satisfies_program(program: QuaternionProgram, x: np.ndarray) -> None:
+def _assert_satisfies_program(slew: Slew, x: np.ndarray) -> None:
     """The family's program (the case stated on convexguid.ocp) holds at the reference's node rows ``x``: its
     defects, boundary rows, boxes, cones and forbidden rows."""
-    x = program.from_node_rows(x)
+    program, x = slew.program, slew.from_node_rows(x)
     ev = program.evaluate(x, jacobians=False)
     for block in ev.equalities:
         assert np.max(np.abs(block.values)) < DEFECT_TOL, block.name
@@ -72,10 +73,10 @@ def no_cone_time():
 def test_minimum_time_satisfies_the_numpy_transcription(no_cone_time):
     case, guess, tf_guess, result = no_cone_time
     assert result.success, result.status
-    program = QuaternionProgram(case, K_SMALL, guess, tf_guess)
-    assert program.from_node_rows(result.x).shape == (program.num_variables,)
-    assert result.objective == pytest.approx(program.final_time(program.from_node_rows(result.x)))
-    _assert_satisfies_program(program, result.x)
+    slew = transcribe_slew(case, K_SMALL, guess, tf_guess)
+    assert slew.from_node_rows(result.x).shape == (slew.program.num_variables,)
+    assert result.objective == pytest.approx(slew.program.final_time(slew.from_node_rows(result.x)))
+    _assert_satisfies_program(slew, result.x)
 
 
 def test_minimum_time_lies_between_physical_bounds(no_cone_time):
@@ -101,9 +102,9 @@ def test_full_inertia_keep_in_and_forbidden_attitude():
     margin = np.radians(1.0)
     result = solve_quaternion_attitude_ipopt(case, K_SMALL, guess, tf_guess, margin=margin)
     assert result.success, result.status
-    program = QuaternionProgram(case, K_SMALL, guess, tf_guess, margin)
-    _assert_satisfies_program(program, result.x)
-    q = program.nodes(program.from_node_rows(result.x))[:, :4]
+    slew = transcribe_slew(case, K_SMALL, guess, tf_guess, margin)
+    _assert_satisfies_program(slew, result.x)
+    q = slew.nodes(slew.from_node_rows(result.x))[:, :4]
     q = q / np.linalg.norm(q, axis=1, keepdims=True)  # |q| drifts O(h^4) from 1: compare normalised attitudes
     closest = np.degrees(quat_angle_between(q, case.forbidden[0].q).min())
     widest = keep_out_angles_deg(q, zenith, zenith).max()
@@ -122,11 +123,12 @@ def test_energy_decreases_with_the_final_time():
         guess, _ = eigenaxis_start(case, K_SMALL)
         result = solve_quaternion_attitude_ipopt(case, K_SMALL, guess, tf)
         assert result.success, result.status
-        program = QuaternionProgram(case, K_SMALL, guess, tf)
-        assert program.from_node_rows(result.x).shape == (program.num_variables,)
-        _assert_satisfies_program(program, result.x)
-        ev = program.evaluate(program.from_node_rows(result.x), jacobians=False)
-        assert result.objective == pytest.approx(np.sum(program.residual_weights() * ev.residuals**2), rel=1e-10)
+        slew = transcribe_slew(case, K_SMALL, guess, tf)
+        assert slew.from_node_rows(result.x).shape == (slew.program.num_variables,)
+        _assert_satisfies_program(slew, result.x)
+        ev = slew.program.evaluate(slew.from_node_rows(result.x), jacobians=False)
+        assert result.objective == pytest.approx(np.sum(slew.program.residual_weights() * ev.residuals**2),
+                                                 rel=1e-10)
         energies.append(result.objective)
     print(f"energy: tf=50 s {energies[0]:.8g}, tf=70 s {energies[1]:.8g}")
     assert energies[1] < energies[0]
@@ -142,9 +144,9 @@ def test_multicone_minimum_time_clears_every_cone():
     print(f"multicone K={intervals}: minimum time {result.objective:.6f} s ({result.status}, {result.iterations} it, "
           f"solve {result.wall_time_s:.3f} s, setup {result.setup_time_s:.3f} s)")
     assert result.success, result.status
-    program = QuaternionProgram(case, intervals, guess, tf_guess)
-    _assert_satisfies_program(program, result.x)
-    q = program.nodes(program.from_node_rows(result.x))[:, :4]
+    slew = transcribe_slew(case, intervals, guess, tf_guess)
+    _assert_satisfies_program(slew, result.x)
+    q = slew.nodes(slew.from_node_rows(result.x))[:, :4]
     assert len(case.cones) == 4
     for cone in case.cones:
         cosine, _ = cone_cosine(cone, q)

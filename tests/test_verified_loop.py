@@ -135,17 +135,19 @@ def test_a_boundary_rate_outside_the_rate_box_is_one_line_naming_the_key():
 
 def test_a_start_that_breaks_the_torque_box_is_restored_and_still_reaches_the_optimum():
     """The same slew from an eigenaxis start squeezed into 0.8 x its time: 1.56x the torque box at the ends."""
-    from convexguid.families.quaternion_attitude.program import QuaternionProgram, eigenaxis_guess
-    from convexguid.families.quaternion_attitude.solve import planning_setup
+    from convexguid.families.quaternion_attitude.program import eigenaxis_guess, transcribe_slew
+    from convexguid.families.quaternion_attitude.solve import QuaternionChecker, planning_setup
     from convexguid.problem_files import load_problem
     from convexguid.scp.check_repair import PlanningSetup
 
-    setup = planning_setup(load_problem(PROBLEMS / "wang_multicone_time.yaml", SLEW_180))
-    program = setup.program
-    tf = 0.8 * program.final_time(program.initial_guess())
-    nodes = eigenaxis_guess(program.case, np.linspace(0.0, tf, program.K + 1))
-    squeezed = QuaternionProgram(program.case, program.K, nodes, tf)
-    assert np.abs(squeezed.nodes(squeezed.initial_guess())[:, 7:]).max() > 1.5  # the start breaks the 1 N m box
-    outcome = PlanningSetup(squeezed, setup.settings, setup.checker, setup.budget).solve()
+    spec = load_problem(PROBLEMS / "wang_multicone_time.yaml", SLEW_180)
+    setup = planning_setup(spec)
+    slew = setup.checker.slew(setup.program)
+    tf = 0.8 * slew.program.final_time(slew.program.initial_guess())
+    nodes = eigenaxis_guess(slew.case, np.linspace(0.0, tf, slew.intervals + 1))
+    squeezed = transcribe_slew(slew.case, slew.intervals, nodes, tf)
+    assert np.abs(squeezed.nodes(squeezed.program.initial_guess())[:, 7:]).max() > 1.5  # breaks the 1 N m box
+    outcome = PlanningSetup(squeezed.program, setup.settings, QuaternionChecker(squeezed, spec.verification),
+                            setup.budget).solve()
     assert outcome.status == "converged", outcome.message
     assert outcome.program.final_time(outcome.x) == pytest.approx(BILIMORIA_WIE_TIME_S, rel=0.01)

@@ -10,11 +10,13 @@ the body torque :math:`u`, full rigid-body dynamics with a full inertia matrix:
 
 **Stated on convexguid.ocp.** :func:`attitude_problem` states the case as a :class:`convexguid.ocp.Problem` (the
 framework a user states a problem in): states ``q1..q4``, ``w1..w3``, torques ``u1..u3``, the dynamics above as
-CasADi expressions, the constraints below; :class:`QuaternionProgram` is its Hermite-Simpson transcription
-(:mod:`convexguid.ocp.hermite_simpson`) on ``K`` equal intervals with the torque linear between nodes, CasADi's
-exact sparse Jacobians and Lagrangian Hessian, and a free final time through :math:`h = t_f/K`. (Before, the family
-wrote the same NLP by hand in numpy: 481 lines of this module, now 302 with the start's symmetry offset; the figures
-of every problem file are unchanged, validation/REPORT.md.)
+CasADi expressions, the constraints below. :func:`transcribe_slew` transcribes it with the package's own
+Hermite-Simpson program (:class:`convexguid.ocp.hermite_simpson.HermiteSimpsonProgram`, not a subclass) on ``K``
+equal intervals with the torque linear between nodes, CasADi's exact sparse Jacobians and Lagrangian Hessian, and a
+free final time through :math:`h = t_f/K`; a :class:`Slew` pairs that program with what it does not keep, the case
+and the node margin, and reads its plans (node rows, times, torque). (Before, the family wrote the same NLP by hand
+in numpy: 481 lines of this module, 299 once stated on convexguid.ocp; the figures of every problem file are
+unchanged, validation/REPORT.md.)
 
 **Unit quaternion.** No norm constraint is imposed: the kinematics preserve
 :math:`|q|` exactly in continuous time and Hermite-Simpson keeps it to
@@ -199,50 +201,55 @@ files: factor 1 left two random slews at the iteration limit, 3 one (the same on
 did), 10 two; iteration counts otherwise within the noise of one another."""
 
 
-class QuaternionProgram(HermiteSimpsonProgram):
-    """The case stated on :mod:`convexguid.ocp` (:func:`attitude_problem`) and transcribed by its Hermite-Simpson
-    program with the torque linear between nodes; starts from ``guess`` (node rows ``[q, omega, u]``) and
-    ``tf_guess``, node constraints tightened by ``margin`` (rad)."""
+@dataclass(frozen=True)
+class Slew:
+    """A slew as the SCP plans it: ``program``, the plain Hermite-Simpson transcription of :func:`attitude_problem`,
+    with the case it states (a repair's has a tightened rate bound) and the margin (rad) its node constraints are
+    tightened by, neither of which the program keeps. The methods read a plan ``x`` of ``program``."""
 
-    def __init__(self, case: AttitudeCase, intervals: int, guess: np.ndarray, tf_guess: float,
-                 margin: float = 0.0) -> None:
-        self.case, self.K, self.margin, self._tf_guess = case, intervals, margin, tf_guess
-        self.free_time = case.tf is None
-        self.num_nodes = intervals + 1
-        self.rate_scale = RATE_SCALE_FACTOR * natural_rate(case, tf_guess)
-        """Scale of the body rates and of their defects, rad/s (:func:`natural_rate` over the guessed duration)."""
-        guess = np.asarray(guess, dtype=float).reshape(self.num_nodes, NODE)
-        problem = attitude_problem(case, intervals, tf_guess, self.rate_scale, margin)
-        problem.initial_guess(guess[:, :NX], guess[:, NX:])
-        super().__init__(problem)
-        self.objective_scale = tf_guess if self.free_time else self._guess_energy()
+    case: AttitudeCase
+    margin: float
+    program: HermiteSimpsonProgram
 
-    def _guess_energy(self) -> float:
-        """Energy of the initial guess (at least 1e-3 of the energy with every torque at the largest axis bound)."""
-        select, weights = self._energy_rows
-        energy = float(weights @ (select @ self.initial_guess()) ** 2)
-        return max(energy, 1e-3 * 3 * float(np.max(self.case.torque_max))**2 * self.case.tf)
+    @property
+    def intervals(self) -> int:
+        return self.program.N
 
     def nodes(self, x: np.ndarray) -> np.ndarray:
         """Node rows ``[q, omega, u]``, shape ``(K + 1, 10)``."""
-        return np.hstack([self.states(x), self.node_controls(x)])
+        return np.hstack([self.program.states(x), self.program.node_controls(x)])
 
     def from_node_rows(self, x: np.ndarray) -> np.ndarray:
-        """This program's vector from node rows ``[q, omega, u]`` flattened (and :math:`t_f` last when free), the
+        """The program's vector from node rows ``[q, omega, u]`` flattened (and :math:`t_f` last when free), the
         layout of the IPOPT reference (:mod:`convexguid.families.quaternion_attitude.reference`)."""
-        nodes = np.asarray(x[: self.num_nodes * NODE]).reshape(self.num_nodes, NODE)
-        return self.assemble(nodes[:, :NX], nodes[:, NX:], float(x[-1]) if self.free_time else self.case.tf)
+        program, n1 = self.program, self.intervals + 1
+        nodes = np.asarray(x[: n1 * NODE]).reshape(n1, NODE)
+        return program.assemble(nodes[:, :NX], nodes[:, NX:], float(x[-1]) if program.free_time else self.case.tf)
 
     def times(self, x: np.ndarray) -> np.ndarray:
-        return self.case.t0 + np.linspace(0.0, self.final_time(x), self.num_nodes)
+        return self.case.t0 + np.linspace(0.0, self.program.final_time(x), self.intervals + 1)
 
     def size(self) -> ProgramSize:
-        lin = self.linear_constraints()
-        return ProgramSize(self.num_variables, lin.A.shape[0] + NX * self.K, lin.G.shape[0] + self.num_path)
+        lin = self.program.linear_constraints()
+        return ProgramSize(self.program.num_variables, lin.A.shape[0] + NX * self.intervals,
+                           lin.G.shape[0] + self.program.num_path)
 
     def torque_command(self, x: np.ndarray) -> LinearTorque:
         """Linear interpolation of the node torques (the transcription's control model); kinks at the nodes."""
-        return LinearTorque(self.times(x), self.node_controls(x))
+        return LinearTorque(self.times(x), self.program.node_controls(x))
+
+
+def transcribe_slew(case: AttitudeCase, intervals: int, guess: np.ndarray, tf_guess: float,
+                    margin: float = 0.0) -> Slew:
+    """The case stated on :mod:`convexguid.ocp` (:func:`attitude_problem`, node constraints tightened by ``margin``,
+    rad) and transcribed on ``intervals`` Hermite-Simpson intervals, starting from ``guess`` (node rows
+    ``[q, omega, u]``) and ``tf_guess``. The body rates and their defects are scaled by :data:`RATE_SCALE_FACTOR`
+    times :func:`natural_rate` over the guessed duration."""
+    rate_scale = RATE_SCALE_FACTOR * natural_rate(case, tf_guess)
+    guess = np.asarray(guess, dtype=float).reshape(intervals + 1, NODE)
+    problem = attitude_problem(case, intervals, tf_guess, rate_scale, margin)
+    problem.initial_guess(guess[:, :NX], guess[:, NX:])
+    return Slew(case, margin, HermiteSimpsonProgram(problem))
 
 
 def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_scale: float,

@@ -124,7 +124,8 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
     tf_guess : float
         Initial final time, s (also the time scale; ignored as a variable when ``case.tf`` is set).
     margin : float, optional
-        Node margin on the cones and forbidden attitudes, rad (as :class:`QuaternionProgram`'s).
+        Node margin on the cones and forbidden attitudes, rad (as
+        :func:`~convexguid.families.quaternion_attitude.program.transcribe_slew`'s).
     max_iter : int, optional
         IPOPT's iteration limit, default 3000.
     tol : float, optional
@@ -133,9 +134,10 @@ def solve_quaternion_attitude_ipopt(case: AttitudeCase, intervals: int, guess: n
     Returns
     -------
     ReferenceResult
-        ``x`` in :class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`'s layout
-        (nodes raveled, then :math:`t_f` for minimum time), ``objective`` the final time (s) or the
-        energy :math:`\\int|u|^2 dt` (N^2 m^2 s), IPOPT status and iteration count, solve and setup times.
+        ``x`` as node rows (nodes raveled, then :math:`t_f` for minimum time; what
+        :meth:`~convexguid.families.quaternion_attitude.program.Slew.from_node_rows` takes to the program's
+        vector), ``objective`` the final time (s) or the energy :math:`\\int|u|^2 dt` (N^2 m^2 s), IPOPT status
+        and iteration count, solve and setup times.
 
     Raises
     ------

@@ -1,6 +1,7 @@
 """Plan, verify and summarise a ``quaternion_attitude`` problem: SCP (minimum time or energy) or path transfer.
 
-The SCP plans on the nodes of :class:`~convexguid.families.quaternion_attitude.program.QuaternionProgram`;
+The SCP plans on the nodes of the slew's Hermite-Simpson program
+(:func:`~convexguid.families.quaternion_attitude.program.transcribe_slew`);
 the plan's torque (linear between nodes) is then integrated with SciPy, node to node, and every cone,
 the forbidden attitudes, the rate and torque boxes are checked on a dense grid. Where
 the path cuts a constraint between nodes, the node constraints are tightened by the
@@ -23,11 +24,13 @@ from convexguid.families.quaternion_attitude.path_transfer import PathTransferPr
 from convexguid.families.quaternion_attitude.program import (
     AttitudeCase,
     Forbidden,
-    QuaternionProgram,
+    Slew,
     eigenaxis_guess,
     eigenaxis_start,
+    transcribe_slew,
 )
 from convexguid.geometry import PointingCone
+from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.rotations import quat_angle_between, quat_sign_continuous
 from convexguid.scp.check_repair import Check, PlanningSetup, Repair, grown_margin
 from convexguid.scp.problem import ProgramSize, SCPSettings
@@ -100,22 +103,35 @@ class QuaternionChecker:
     """The family's side of the engine's check-repair loop (:mod:`convexguid.scp.check_repair`).
 
     ``check`` integrates the planned torque (linear between nodes, integrated node to node) and checks
-    every cone, the forbidden attitudes, the rate and torque boxes and the final state on a dense grid. ``repair``
-    tightens the node constraints by what the check saw between nodes: the cone and forbidden-attitude
-    margin, and the rate bound, each by a margin that grows every round that does not clear it
-    (:func:`~convexguid.scp.check_repair.grown_margin`). The tightened program starts from the last plan;
+    every cone, the forbidden attitudes, the rate and torque boxes and the final state on a dense grid, all as the
+    first slew's case states them. ``repair`` tightens the node constraints by what the check saw between nodes: the
+    cone and forbidden-attitude margin, and the rate bound, each by a margin that grows every round that does not
+    clear it (:func:`~convexguid.scp.check_repair.grown_margin`). The tightened program starts from the last plan;
     the engine moves that start into the tightened (hard) rate box.
+
+    The loop hands back programs only; the checker knows their slews (case and margin): the first, and the last
+    repair's, the only one the loop goes on with (earlier repairs' programs, about 13 MB each on the 50-interval
+    multi-cone slew, are not kept).
     """
 
-    def __init__(self, case: AttitudeCase, settings) -> None:
-        self.case, self.settings = case, settings
+    def __init__(self, first: Slew, settings) -> None:
+        self.case, self.settings = first.case, settings
+        self.first = self.latest = first
 
-    def check(self, program: QuaternionProgram, x: np.ndarray) -> Check:
+    def slew(self, program: HermiteSimpsonProgram) -> Slew:
+        """The slew whose program ``program`` is: the first or the last repair's."""
+        for slew in (self.latest, self.first):
+            if slew.program is program:
+                return slew
+        raise ValueError(f"{self.case.name}: the program is neither this checker's first nor its last repair's")
+
+    def check(self, program: HermiteSimpsonProgram, x: np.ndarray) -> Check:
         tf = program.final_time(x)
-        verification, track = verify_plan(self.case, self.case.t0 + tf, program.torque_command(x), self.settings)
+        torque = self.slew(program).torque_command(x)
+        verification, track = verify_plan(self.case, self.case.t0 + tf, torque, self.settings)
         return Check(verification, track)
 
-    def repair(self, program: QuaternionProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None:
+    def repair(self, program: HermiteSimpsonProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None:
         by_name = {c.name: c for c in check.verification.checks}
         geometric = [c.violation for c in check.verification.checks
                      if c.name.startswith(("keep_out_", "keep_in_", "forbidden_")) and c.violation > 0]
@@ -123,7 +139,8 @@ class QuaternionChecker:
         rate_excess = rate.violation if rate is not None else 0.0
         if not geometric and rate_excess <= 0:
             return None
-        margin, tight_case, done = program.margin, program.case, []
+        slew = self.slew(program)
+        margin, tight_case, done = slew.margin, slew.case, []
         if geometric:
             step = np.radians(grown_margin(max(geometric), attempt, CONE_MARGIN_FLOOR_DEG))
             margin += step
@@ -132,8 +149,8 @@ class QuaternionChecker:
             step = np.radians(grown_margin(1.5 * rate_excess, attempt, 0.0))
             tight_case = replace(tight_case, rate_max=tight_case.rate_max - step)
             done.append(f"rate bound -{np.degrees(step):.3g} deg/s")
-        tighter = QuaternionProgram(tight_case, program.K, program.nodes(x), program.final_time(x), margin)
-        return Repair(tighter, tighter.initial_guess(), "; ".join(done))
+        self.latest = transcribe_slew(tight_case, slew.intervals, slew.nodes(x), program.final_time(x), margin)
+        return Repair(self.latest.program, self.latest.program.initial_guess(), "; ".join(done))
 
 
 CONE_MARGIN_FLOOR_DEG = 0.02
@@ -181,8 +198,8 @@ def planning_setup(spec, case: AttitudeCase | None = None) -> PlanningSetup:
     else:
         guess, tf_guess = eigenaxis_start(case, K)
     settings = scp_settings(spec.solver, minimum_time=case.tf is None)
-    return PlanningSetup(QuaternionProgram(case, K, guess, tf_guess), settings,
-                         QuaternionChecker(case, spec.verification), budget=MAX_TIGHTENINGS)
+    slew = transcribe_slew(case, K, guess, tf_guess)
+    return PlanningSetup(slew.program, settings, QuaternionChecker(slew, spec.verification), budget=MAX_TIGHTENINGS)
 
 
 def _state_columns(q: np.ndarray, omega: np.ndarray, torque: np.ndarray) -> dict[str, np.ndarray]:
@@ -236,27 +253,29 @@ def solve_quaternion_attitude(spec, log: Callable[[IterationRecord], None] | Non
     if spec.method == "path_transfer":
         return _solve_path_transfer(case, spec, start, figures)
     if spec.objective == "energy" and case.tf is None:
-        timed = planning_setup(spec, case).solve()
+        setup = planning_setup(spec, case)
+        timed = setup.solve()
         if timed.result.status != "converged":
             timed.message = "minimum time (which sets the energy problem's final time) did not converge: " \
                 + timed.message
-            return planned_solution(spec, timed, start, timed.program.size(), figures=figures)
+            return planned_solution(spec, timed, start, setup.checker.slew(timed.program).size(), figures=figures)
         figures = replace(figures, min_time_s=timed.program.final_time(timed.x))
         case = replace(case, tf=spec.boundary.tf_min_time_factor * figures.min_time_s)
-    outcome = planning_setup(spec, case).solve(log)
-    program, x = outcome.program, outcome.x
-    tf = program.final_time(x)
-    nodes = program.nodes(x)
+    setup = planning_setup(spec, case)
+    outcome = setup.solve(log)
+    slew, x = setup.checker.slew(outcome.program), outcome.x
+    tf = slew.program.final_time(x)
+    nodes = slew.nodes(x)
     node_cols = _state_columns(nodes[:, :4], nodes[:, 4:7], nodes[:, 7:])
-    figures = replace(figures, maneuver_time_s=tf, node_constraint_margin_deg=float(np.degrees(program.margin)),
+    figures = replace(figures, maneuver_time_s=tf, node_constraint_margin_deg=float(np.degrees(slew.margin)),
                       max_quaternion_norm_error=float(np.abs(np.linalg.norm(nodes[:, :4], axis=1) - 1).max()),
-                      interval_s=tf / program.K, initial_guess=spec.initial_guess, objective_kind=spec.objective)
+                      interval_s=tf / slew.intervals, initial_guess=spec.initial_guess, objective_kind=spec.objective)
     dense = None
     if outcome.check is not None:
         track = outcome.check.track
         figures = replace(figures, energy=_energy(track), min_cone_margin_deg=cone_margin_deg(case, track))
         dense = Trajectory(track.t, _dense_columns(case, track))
-    return planned_solution(spec, outcome, start, program.size(), nodes=Trajectory(program.times(x), node_cols),
+    return planned_solution(spec, outcome, start, slew.size(), nodes=Trajectory(slew.times(x), node_cols),
                             dense=dense, figures=figures)
 
 
