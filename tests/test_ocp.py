@@ -260,6 +260,11 @@ def test_convexguid_solve_runs_a_problem_module(tmp_path, capsys):
 @pytest.mark.parametrize(("module", "overrides", "message"), [
     ("brachistochrone.py", ["g=3"], r"--set 'g=3': not a parameter of build\(\); its parameters: intervals"),
     ("missing.py", [], r"missing.py: file not found"),
+    # a statement refused while build() states it names the file too
+    ("brachistochrone.py", ["intervals=1"],
+     r"brachistochrone.py: brachistochrone: transcription: intervals: expected an integer >= 2 \(got 1\)"),
+    ("phases/two_burn_orbit_raise.py", ["intervals=8000"],
+     r"two_burn_orbit_raise.py: two-burn-orbit-raise: burn1.transcription.intervals: problem too large"),
     # a size that would eat the machine's memory is refused before anything is transcribed
     ("brachistochrone.py", ["intervals=100000000"],
      r"brachistochrone.py: brachistochrone: transcription.intervals: problem too large: .* TiB .* \(got 100000000\)"),

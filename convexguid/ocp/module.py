@@ -44,8 +44,8 @@ def load_module_problem(path: str | Path, overrides: Sequence[str] = ()) -> Prob
             raise SpecError(f"{path}: --set {name}: the value is not YAML (got {raw!r})") from None
     try:
         problem = build(**values)
-    except SpecError:
-        raise
+    except SpecError as exc:  # a statement the problem refused: the line, after the file that stated it
+        raise SpecError(f"{path}: {exc}") from None
     except Exception as exc:  # noqa: BLE001 - the user's module: one line, not a traceback
         raise SpecError(f"{path}: build() raised {type(exc).__name__}: {exc}") from None
     if not isinstance(problem, (Problem, Phases)):
