@@ -19,75 +19,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
 
 from convexguid.errors import SpecError
+from convexguid.ocp.declarations import PathConstraint, Variable, number
 from convexguid.ocp.size import check_problem_size
 
 TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh", "chebyshev", "flow")
 """The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
 :mod:`convexguid.ocp.hold`, :mod:`convexguid.ocp.chebyshev`; ``"flow"``: a closed-form flow, :meth:`Problem.flow`)."""
-
-
-@dataclass(frozen=True)
-class Variable:
-    """A scalar state or control: its symbol, bounds (``None``: none), boundary values and typical magnitude."""
-
-    name: str
-    symbol: ca.SX
-    lower: float | None
-    upper: float | None
-    initial: float | None
-    final: float | None
-    scale: float
-    guess: float | None
-    unit: str = ""
-    period: float | None = None
-    """For an angle control without bounds: the period (2 pi) its values may be shifted by, see
-    :meth:`Problem.control`."""
-    magnitude_stated: bool = True
-    """False when nothing stated gives the variable's size (no scale, no bound, no nonzero boundary value): a state's
-    scale is then estimated from its rate (:meth:`Problem.state_scales`)."""
-
-
-@dataclass(frozen=True)
-class PathConstraint:
-    """``expression <= 0`` in ``unit``: over the share ``during`` of the maneuver (every node and midpoint there,
-    checked densely between them), or at the one instant ``at`` (a share of the final time)."""
-
-    name: str
-    expression: ca.SX
-    unit: str
-    during: tuple[float, float] = (0.0, 1.0)
-    at: float | None = None
-    equality: bool = False
-    """``expression == 0`` instead (a path equality: linearized like the inequalities, never tightened)."""
-    at_nodes: bool = True
-    """False: imposed between the nodes only (Hermite-Simpson's midpoints), for a bound the nodes hold hard."""
-    at_midpoints: bool = True
-    """False: imposed at the nodes only (a path equality of the states alone, see :meth:`Problem.path_equality`)."""
-    cone: tuple[ca.SX, ca.SX] | None = None
-    """For a second-order cone ``||vector|| <= bound``: ``(bound, vector)``, affine in states and controls (kept
-    exact in every subproblem); ``expression`` is then ``||vector|| - bound``, what the dense check evaluates."""
-
-    def applies(self, share: float, node: bool) -> bool:
-        """Whether the constraint is imposed at the point ``share`` of the maneuver (a node or a midpoint)."""
-        if self.at is not None:
-            return node and abs(share - self.at) < 1e-9
-        if (node and not self.at_nodes) or (not node and not self.at_midpoints):
-            return False
-        return self.during[0] - 1e-12 <= share <= self.during[1] + 1e-12
-
-
-def _number(where: str, value: object, allow_none: bool = True) -> float | None:
-    if value is None and allow_none:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SpecError(f"{where}: expected a finite number{' or None' if allow_none else ''} (got {value!r})")
-    return float(value)
 
 
 class Problem:
@@ -130,23 +73,23 @@ class Problem:
         if name in {v.name for v in (*self.states, *self.controls)}:
             raise SpecError(f"{where}: the name is already taken; give every state and control its own name")
         lower, upper = (None, None) if bounds is None else bounds
-        lower, upper = _number(f"{where}: lower bound", lower), _number(f"{where}: upper bound", upper)
+        lower, upper = number(f"{where}: lower bound", lower), number(f"{where}: upper bound", upper)
         if lower is not None and upper is not None and lower > upper:
             raise SpecError(f"{where}: bounds: lower {lower:g} is above upper {upper:g}")
-        initial, final = _number(f"{where}: initial", initial), _number(f"{where}: final", final)
+        initial, final = number(f"{where}: initial", initial), number(f"{where}: final", final)
         for label, value in (("initial", initial), ("final", final)):
             if value is not None and ((lower is not None and value < lower) or (upper is not None and value > upper)):
                 raise SpecError(f"{where}: {label} value {value:g} is outside its bounds "
                                 f"[{lower if lower is not None else '-inf'}, {upper if upper is not None else 'inf'}]")
         magnitudes = [abs(v) for v in (lower, upper, initial, final) if v is not None]
-        stated = _number(f"{where}: scale", scale)
+        stated = number(f"{where}: scale", scale)
         scale = stated or max([*magnitudes, 0.0]) or 1.0
         if scale <= 0:
             raise SpecError(f"{where}: scale: must be positive (got {scale:g})")
         if not isinstance(unit, str):
             raise SpecError(f"{where}: unit: expected a string such as 'm/s' (got {unit!r})")
         return Variable(name, ca.SX.sym(name), lower, upper, initial, final, scale,
-                        _number(f"{where}: guess", guess), unit,
+                        number(f"{where}: guess", guess), unit,
                         magnitude_stated=stated is not None or any(m > 0 for m in magnitudes))
 
     def state(self, name: str, bounds: tuple[float | None, float | None] | None = None, initial: float | None = None,
@@ -182,7 +125,7 @@ class Problem:
         in time, which changes no value the dynamics see. A periodic control has no bounds."""
         variable = self._variable("control", name, bounds, None, None, scale, guess, unit)
         if period is not None:
-            period = _number(f"{self.name}: control {name!r}: period", period, allow_none=False)
+            period = number(f"{self.name}: control {name!r}: period", period, allow_none=False)
             if period <= 0 or bounds is not None:
                 raise SpecError(f"{self.name}: control {name!r}: period: expected a positive period and no bounds "
                                 f"(got period {period!r}, bounds {bounds!r})")
@@ -197,17 +140,17 @@ class Problem:
         if (fixed is None) == (bounds is None):
             raise SpecError(f"{where}: give either fixed=<seconds> or bounds=(lower, upper)")
         if fixed is not None:
-            self.tf = _number(f"{where}: fixed", fixed, allow_none=False)
+            self.tf = number(f"{where}: fixed", fixed, allow_none=False)
             if self.tf <= 0:
                 raise SpecError(f"{where}: fixed: must be positive (got {self.tf:g})")
             return
-        low, high = _number(f"{where}: bounds", bounds[0], allow_none=False), _number(f"{where}: bounds", bounds[1])
+        low, high = number(f"{where}: bounds", bounds[0], allow_none=False), number(f"{where}: bounds", bounds[1])
         if not 0 < low < (math.inf if high is None else high):
             raise SpecError(f"{where}: bounds: expected 0 < lower < upper (got ({low:g}, {high}))")
         if high is None and guess is None:
             raise SpecError(f"{where}: guess: needed when the final time has no upper bound")
         self.tf_bounds = (low, math.inf if high is None else high)
-        self.tf_guess = _number(f"{where}: guess", guess) or 0.5 * (low + high)
+        self.tf_guess = number(f"{where}: guess", guess) or 0.5 * (low + high)
 
     def dynamics(self, rates: Mapping[ca.SX, ca.SX]) -> None:
         """``{state symbol: its rate}``, each rate an expression of states, controls and :attr:`time`."""
@@ -251,7 +194,7 @@ class Problem:
         nodes only (Hermite-Simpson's midpoints), for a bound the nodes already hold as a hard state bound."""
         where = f"{self.name}: path_constraint {name!r}"
         expression = self._scalar(where, name, expression)
-        window = (0.0, 1.0) if during is None else tuple(_number(f"{where}: during", v, allow_none=False)
+        window = (0.0, 1.0) if during is None else tuple(number(f"{where}: during", v, allow_none=False)
                                                           for v in during)
         if len(window) != 2 or not 0.0 <= window[0] < window[1] <= 1.0:
             raise SpecError(f"{where}: during: expected (start, end) with 0 <= start < end <= 1, shares of the final "
@@ -364,7 +307,7 @@ class Problem:
         """``expression <= 0`` at the instant ``at`` (a share of the final time, on a node of the grid)."""
         where = f"{self.name}: point_constraint {name!r}"
         expression = self._scalar(where, name, expression)
-        share = _number(f"{where}: at", at, allow_none=False)
+        share = number(f"{where}: at", at, allow_none=False)
         if not 0.0 <= share <= 1.0:
             raise SpecError(f"{where}: at: expected a share of the final time in [0, 1] (got {at!r})")
         self.constraints.append(PathConstraint(name, expression, unit, at=share))

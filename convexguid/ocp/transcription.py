@@ -35,9 +35,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
-from convexguid.ocp.parts import Margins, SparsityPattern, SymbolicNLP, cone_scales
+from convexguid.ocp.parts import AffineCones, Margins, SparsityPattern, SymbolicNLP
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
-from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
@@ -254,33 +254,13 @@ class Transcription:
         self.affine = not any(ca.depends_on(jacobian, z) for jacobian in jacobians.values())
 
     def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
-        """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value: one
-        affine map ``W z + w`` (constant ``W``), in :class:`~convexguid.scp.problem.ConeBlock` order.
-
-        Each cone is divided by its own magnitude (:func:`cone_scales`), which leaves the set it describes as it is:
-        its violation is then judged in that magnitude, as the defects are in the states' scales. A glide slope in
-        metres over a 2 km descent was otherwise held to 1e-7 m, below what the convex solver resolves (measured: a
-        powered-descent round stalled 2.5e-7 m outside it and phase 1 took that for an infeasibility).
-        """
+        """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value, as one
+        affine map (:class:`~convexguid.ocp.parts.AffineCones`, each cone in its own magnitude)."""
         parts = list(stated)
         if self.fuel_norm == 2:
             slacks = z[self.slack_start: self.slack_start + self.num_slacks]
             parts += [ca.vertcat(slacks[j], V[:, j]) for j in range(self.num_slacks)]
-        self.cone_sizes = tuple(part.shape[0] for part in parts)
-        if not parts:
-            self._cone_map = None
-            return
-        stacked = ca.vertcat(*parts)
-        jacobian = ca.jacobian(stacked, z)
-        constant = ca.Function("cone_map", [z], [jacobian, stacked])(np.zeros(self.num_variables))
-        # the map is affine: its matrix, in both the forms an evaluation needs, is built here once
-        W = SparsityPattern(jacobian.sparsity()).coo(constant[0])
-        row_scale = np.repeat(1.0 / cone_scales(W.tocsr(), self.variable_scale(), self.cone_sizes), self.cone_sizes)
-        W = sp.coo_matrix((W.data * row_scale[W.row], (W.row, W.col)), shape=W.shape)
-        self._cone_map = (W.tocsr(), W, np.asarray(constant[1]).ravel() * row_scale)
-        firsts = np.concatenate([[0], np.cumsum(self.cone_sizes)[:-1]]).astype(int)
-        self._cone_first_rows = firsts[: len(stated)]
-        self._cone_margin_scale = row_scale[self._cone_first_rows]
+        self._cones = AffineCones.of(z, parts, len(stated), self.variable_scale()) if parts else None
 
     def _epigraph(self, z: ca.SX, final_state: ca.SX, tf) -> ca.SX:
         """The objective less its epigraph variable ``J`` (``<= 0``): the fuel with a free final time, or a
@@ -488,12 +468,7 @@ class Transcription:
             value, jacobian = self._objective_epigraph(z)
             inequalities += (ConstraintBlock("objective_epigraph", np.asarray(value, dtype=float).ravel(),
                                              self._epigraph_pattern.coo(jacobian) if jacobians else None),)
-        cones = ()
-        if self._cone_map is not None:
-            W, W_coo, offset = self._cone_map
-            values = W @ z + offset
-            values[self._cone_first_rows] -= self.margins.cone * self._cone_margin_scale
-            cones = (ConeBlock("cone_constraints", values, W_coo if jacobians else None, self.cone_sizes, "scaled"),)
+        cones = (self._cones.block(z, self.margins.cone, jacobians),) if self._cones is not None else ()
         return Evaluation(residuals, residual_jacobian, inequalities, equalities, cones)
 
     def symbolic_nlp(self, z: ca.SX | None = None) -> SymbolicNLP:

@@ -1,0 +1,70 @@
+"""What a :class:`~convexguid.ocp.problem.Problem`'s declarations make: a scalar :class:`Variable` (state, control
+or parameter) and a :class:`PathConstraint`, and the check every number a user gives goes through."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+
+from convexguid.errors import SpecError
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A scalar state or control: its symbol, bounds (``None``: none), boundary values and typical magnitude."""
+
+    name: str
+    symbol: ca.SX
+    lower: float | None
+    upper: float | None
+    initial: float | None
+    final: float | None
+    scale: float
+    guess: float | None
+    unit: str = ""
+    period: float | None = None
+    """For an angle control without bounds: the period (2 pi) its values may be shifted by, see
+    :meth:`Problem.control`."""
+    magnitude_stated: bool = True
+    """False when nothing stated gives the variable's size (no scale, no bound, no nonzero boundary value): a state's
+    scale is then estimated from its rate (:meth:`Problem.state_scales`)."""
+
+
+@dataclass(frozen=True)
+class PathConstraint:
+    """``expression <= 0`` in ``unit``: over the share ``during`` of the maneuver (every node and midpoint there,
+    checked densely between them), or at the one instant ``at`` (a share of the final time)."""
+
+    name: str
+    expression: ca.SX
+    unit: str
+    during: tuple[float, float] = (0.0, 1.0)
+    at: float | None = None
+    equality: bool = False
+    """``expression == 0`` instead (a path equality: linearized like the inequalities, never tightened)."""
+    at_nodes: bool = True
+    """False: imposed between the nodes only (Hermite-Simpson's midpoints), for a bound the nodes hold hard."""
+    at_midpoints: bool = True
+    """False: imposed at the nodes only (a path equality of the states alone, see :meth:`Problem.path_equality`)."""
+    cone: tuple[ca.SX, ca.SX] | None = None
+    """For a second-order cone ``||vector|| <= bound``: ``(bound, vector)``, affine in states and controls (kept
+    exact in every subproblem); ``expression`` is then ``||vector|| - bound``, what the dense check evaluates."""
+
+    def applies(self, share: float, node: bool) -> bool:
+        """Whether the constraint is imposed at the point ``share`` of the maneuver (a node or a midpoint)."""
+        if self.at is not None:
+            return node and abs(share - self.at) < 1e-9
+        if (node and not self.at_nodes) or (not node and not self.at_midpoints):
+            return False
+        return self.during[0] - 1e-12 <= share <= self.during[1] + 1e-12
+
+
+def number(where: str, value: object, allow_none: bool = True) -> float | None:
+    """``value`` as a float; one line naming ``where`` when it is not a finite number (None passes if allowed)."""
+    if value is None and allow_none:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SpecError(f"{where}: expected a finite number{' or None' if allow_none else ''} (got {value!r})")
+    return float(value)
