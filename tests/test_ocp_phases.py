@@ -230,3 +230,16 @@ def test_a_maneuver_cut_in_two_phases_is_the_same_program_as_in_one():
     answer = solve_with_ipopt(transcribe(halves))
     assert answer.success and answer.objective <= split.objective <= answer.objective * (1 + 1e-3)
     assert split.verification.passed and "first.keep_out" in {c.name for c in split.verification.checks}
+
+
+def test_a_link_broken_on_the_flown_ends_refines_the_phase_that_drifted():
+    """The orbit raise on 4 intervals a phase: the coast (no stated end values, so its own check passes) drifts
+    between its 4 nodes, and the continuity into the second burn, judged on the flown ends, breaks; the repair
+    refines the coast where its error is, and the plan verifies at Dymos' delta-v."""
+    solution = _example("two_burn_orbit_raise").build(intervals=4).solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    first, repaired = solution.repair_rounds[0], solution.repair_rounds[1]
+    assert not first.passed and "link_coast." in first.worst
+    assert repaired.repair.startswith("coast: ") and "burn" not in repaired.repair
+    assert solution.figures.phases["coast"]["intervals"] > 4 == solution.figures.phases["burn1"]["intervals"]
+    assert solution.nodes.columns["deltav"][-1] == pytest.approx(0.3995, rel=1e-3)

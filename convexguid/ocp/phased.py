@@ -28,7 +28,7 @@ from convexguid.ocp.parts import SparsityPattern, SymbolicNLP
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair
 from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
-from convexguid.verification import Verification
+from convexguid.verification import ConstraintCheck, Verification
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,11 @@ class PhasedProgram:
             if name in t.problem.ends:
                 return (i, *t.problem.ends[name])
         raise KeyError(name)
+
+    def phases_ending_in(self, link: Link) -> set[int]:
+        """The phases whose end values (not start values) ``link`` uses."""
+        ends = (self._reference_index(str(s)) for s in ca.symvar(ca.SX(link.expression)))
+        return {phase for phase, which, _ in ends if which == "end"}
 
     def _reference_in_z(self, z: ca.SX, name: str):
         i, which, index = self._reference_index(name)
@@ -243,9 +248,11 @@ class PhasedProgram:
 
 @dataclass(frozen=True)
 class PhasedTrack:
-    """The dense check of every phase (its verification and track), in order."""
+    """The dense check of every phase (its verification and track), in order, and each link row's error on the
+    flown ends (:meth:`PhasedProgram.link_errors`)."""
 
     phases: tuple[Check, ...]
+    link_errors: np.ndarray
 
 
 class PhasedChecker:
@@ -257,39 +264,32 @@ class PhasedChecker:
     def check(self, program: PhasedProgram, z: np.ndarray) -> Check:
         checks = tuple(self.single.check(t, piece) for t, piece in zip(program.phases, program.pieces(z),
                                                                         strict=True))
-        names = program.names()
         tracks = [c.track for c in checks]
         errors = program.link_errors([tr.x[0] for tr in tracks], [tr.x[-1] for tr in tracks],
                                      [float(tr.t[-1]) for tr in tracks])
-        final_errors = {f"{name}.{key}": value for name, c in zip(names, checks, strict=True)
+        named = list(zip(program.names(), checks, strict=True))
+        final_errors = {f"{name}.{key}": value for name, c in named
                         for key, value in c.verification.final_errors.items()}
         for label, error in zip(program.link_names, errors, strict=True):
             final_errors[f"link_{label}_error"] = max(final_errors.get(f"link_{label}_error", 0.0), float(error))
-        constraint_checks = tuple(type(k)(f"{name}.{k.name}", k.worst, k.bound, k.sense)
-                                  for name, c in zip(names, checks, strict=True) for k in c.verification.checks)
-        worst = max(final_errors.values(), default=0.0)
+        constraint_checks = tuple(ConstraintCheck(f"{name}.{k.name}", k.worst, k.bound, k.sense)
+                                  for name, c in named for k in c.verification.checks)
         passed = all(c.verification.passed for c in checks) and float(errors.max(initial=0.0)) <= FINAL_TOLERANCE
-        remarks = tuple(f"{name}: {r}" for name, c in zip(names, checks, strict=True) for r in c.verification.remarks)
-        verification = Verification(sum(c.verification.grid_points for c in checks), constraint_checks, worst,
-                                    final_errors, passed, checks[0].verification.tolerances, remarks)
-        return Check(verification, PhasedTrack(checks))
+        verification = Verification(sum(c.verification.grid_points for c in checks), constraint_checks,
+                                    max(final_errors.values(), default=0.0), final_errors, passed,
+                                    checks[0].verification.tolerances,
+                                    tuple(f"{name}: {r}" for name, c in named for r in c.verification.remarks))
+        return Check(verification, PhasedTrack(checks, errors))
 
     def repair(self, program: PhasedProgram, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
         """Repair each phase whose own check failed as a single problem's; refine each phase whose end a link
-        broken on the flown ends uses. None when any of them has no repair left."""
-        checks = check.track.phases
-        to_refine = set()
-        tracks = [c.track for c in checks]
-        errors = program.link_errors([tr.x[0] for tr in tracks], [tr.x[-1] for tr in tracks],
-                                     [float(tr.t[-1]) for tr in tracks])
-        for link in program.links:
-            rows = [r for r, label in enumerate(program.link_names) if label == link.name]
-            if errors[rows].max(initial=0.0) > FINAL_TOLERANCE:
-                to_refine |= {program._reference_index(str(s))[0] for s in ca.symvar(ca.SX(link.expression))
-                              if program._reference_index(str(s))[1] == "end"}
+        broken on the flown ends uses (the drift is that phase's). None when any of them has no repair left."""
+        checks, errors = check.track.phases, check.track.link_errors
+        broken = {program.link_names[r] for r in np.flatnonzero(errors > FINAL_TOLERANCE)}
+        drifted = {i for link in program.links if link.name in broken for i in program.phases_ending_in(link)}
         phases, starts, notes = list(program.phases), program.pieces(z), []
         for i, (t, piece, c) in enumerate(zip(program.phases, starts, checks, strict=True)):
-            if c.verification.passed and i not in to_refine:
+            if c.verification.passed and i not in drifted:
                 continue
             repair = self.single.repair(t, piece, c, attempt) if not c.verification.passed else \
                 self.single.refine(t, piece, c)
