@@ -87,9 +87,14 @@ def run_convexguid(intervals: int) -> dict:
     x = np.column_stack([dense[k] for k in ("x", "y", "z", "vx", "vy", "vz")])
     u = np.column_stack([dense[k] for k in ("ax", "ay", "az")])
     started = time.perf_counter()
-    process = subprocess.run(["convexguid", "solve", str(EXAMPLES / "proxops_openscvx.py"), "--quiet",
+    # the command a user types, from the installation this benchmark runs in (not whatever is first on PATH)
+    command = Path(sys.executable).parent / "convexguid"
+    process = subprocess.run([str(command), "solve", str(EXAMPLES / "proxops_openscvx.py"), "--quiet",
                               "--set", f"intervals={intervals}"], capture_output=True, text=True, check=False)
     process_s = time.perf_counter() - started
+    if process.returncode != 0:
+        raise RuntimeError(f"{command} solve ... --set intervals={intervals} ended with exit {process.returncode}: "
+                           f"{process.stderr.strip()[-300:]}")
     return {"intervals": intervals, "wall_s": wall, "process_s": process_s, "process_exit": process.returncode,
             "status": solution.status, "verified": bool(solution.verification.passed),
             "iterations": solution.iterations, **judge(t, x, u)}
