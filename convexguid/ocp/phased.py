@@ -106,10 +106,11 @@ class PhasedProgram:
         return z[offset + (0 if which == "start" else t.N) * t.nx + index]
 
     def _build_links(self) -> None:
-        rows = ca.vertcat(*(ca.SX(link.expression) for link in self.links)) if self.links else ca.SX(0, 1)
-        self.link_names = [link.name for link in self.links for _ in range(ca.SX(link.expression).shape[0])]
-        self.link_equality = np.array([link.equality for link in self.links
-                                       for _ in range(ca.SX(link.expression).shape[0])], dtype=bool)
+        expressions = [ca.SX(link.expression) for link in self.links]
+        rows = ca.vertcat(*expressions) if expressions else ca.SX(0, 1)
+        per_row = [link for link, e in zip(self.links, expressions, strict=True) for _ in range(e.shape[0])]
+        self.link_names = [link.name for link in per_row]
+        self.link_equality = np.array([link.equality for link in per_row], dtype=bool)
         references = ca.symvar(rows)
         self._references = [str(r) for r in references]
         z = ca.SX.sym("z", self.num_variables)

@@ -84,24 +84,26 @@ class Phases:
     def link(self, name: str, expression) -> None:
         """``expression == 0`` on the phases' end values (symbols from :meth:`Problem.start`, :meth:`Problem.end`
         and :attr:`Problem.duration`), e.g. a total time, or an orbit's energy carried across a staging."""
-        expression = ca.SX(expression)
-        if expression.shape[1] != 1 or expression.shape[0] < 1:
-            raise SpecError(f"{self.name}: link {name!r}: expected a column of expressions (got shape "
-                            f"{expression.shape})")
-        if name in {link[0] for link in self.links}:
-            raise SpecError(f"{self.name}: link {name!r}: the name is already taken")
-        known = {key for p in self.phases for key in p.ends}
-        unknown = sorted({str(s) for s in ca.symvar(expression)} - known)
-        if unknown:
-            raise SpecError(f"{self.name}: link {name!r}: uses {', '.join(unknown)}; a link is stated on phase ends "
-                            "(phase.start(state), phase.end(state), phase.duration)")
-        self.links.append((name, expression, True))
+        self._add_link("link", name, expression, equality=True)
 
     def link_constraint(self, name: str, expression) -> None:
         """``expression <= 0`` on the phases' end values, e.g. a coast of at least 600 s,
         ``600 - coast.duration``, or a whole maneuver within its window."""
-        self.link(name, expression)
-        self.links[-1] = (*self.links[-1][:2], False)
+        self._add_link("link_constraint", name, expression, equality=False)
+
+    def _add_link(self, call: str, name: str, expression, equality: bool) -> None:
+        where = f"{self.name}: {call} {name!r}"
+        expression = ca.SX(expression)
+        if expression.shape[1] != 1 or expression.shape[0] < 1:
+            raise SpecError(f"{where}: expected a column of expressions (got shape {expression.shape})")
+        if name in {link[0] for link in self.links}:
+            raise SpecError(f"{where}: the name is already taken")
+        known = {key for p in self.phases for key in p.ends}
+        unknown = sorted({str(s) for s in ca.symvar(expression)} - known)
+        if unknown:
+            raise SpecError(f"{where}: uses {', '.join(unknown)}; a link is stated on phase ends "
+                            "(phase.start(state), phase.end(state), phase.duration)")
+        self.links.append((name, expression, equality))
 
     def check(self) -> None:
         """Refuse a statement that cannot be solved, one line naming what is wrong."""
