@@ -26,6 +26,12 @@ class SparsityPattern:
         return sp.coo_matrix((np.asarray(values.nonzeros(), dtype=float), (self.rows, self.cols)), shape=self.shape)
 
 
+def coo_pattern(pattern: ca.Sparsity) -> sp.coo_matrix:
+    """A CasADi pattern as a 0/1 matrix."""
+    rows, cols = pattern.get_triplet()
+    return sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=pattern.shape)
+
+
 @dataclass(frozen=True)
 class SymbolicNLP:
     """The NLP a transcription states, in CasADi: the decision vector ``z``, the objective (the linear cost plus the

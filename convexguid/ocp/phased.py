@@ -24,10 +24,18 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.ocp.check import FINAL_TOLERANCE, DenseChecker
+from convexguid.ocp.curvature import ElementCurvature, lagrangian_hessian
 from convexguid.ocp.parts import SparsityPattern, SymbolicNLP
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair
-from convexguid.scp.problem import ConeBlock, ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import (
+    ConeBlock,
+    ConstraintBlock,
+    CurvatureModel,
+    Evaluation,
+    LinearConstraints,
+    OutputConstraints,
+)
 from convexguid.verification import ConstraintCheck, Verification
 
 
@@ -210,25 +218,54 @@ class PhasedProgram:
     @cached_property
     def _link_hessian(self) -> tuple[ca.Function, SparsityPattern]:
         """The nonlinear links' curvature, weighted by their equality and inequality multipliers."""
-        z, (equalities, inequalities) = self._symbols, (self._blocks[True][0], self._blocks[False][0])
-        lam, mu = ca.SX.sym("lam", equalities.shape[0]), ca.SX.sym("mu", inequalities.shape[0])
-        hessian = ca.hessian(ca.dot(lam, equalities) + ca.dot(mu, inequalities), z)[0]
-        return ca.Function("link_hessian", [z, lam, mu], [hessian]), SparsityPattern(hessian.sparsity())
+        return lagrangian_hessian(self._symbols, [self._blocks[True][0], self._blocks[False][0]])
+
+    def _shares(self, weights) -> tuple[list[Weights], Weights]:
+        """Each phase's share of the engine's multipliers, and the links' (after every phase's)."""
+        shares, equality, inequality = [], 0, 0
+        for m_eq, m_in in self._row_counts:
+            shares.append(Weights(weights.equality[equality: equality + m_eq],
+                                  weights.inequality[inequality: inequality + m_in]))
+            equality, inequality = equality + m_eq, inequality + m_in
+        # the links' inequality rows come before the cones' (the engine lists the cones last)
+        links = inequality + self._blocks[False][0].shape[0]
+        return shares, Weights(weights.equality[equality:], weights.inequality[inequality: links])
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
         """The phases' exact Lagrangian Hessians side by side, and the nonlinear links' curvature."""
-        blocks, equality, inequality = [], 0, 0
-        for t, piece, (m_eq, m_in) in zip(self.phases, self.pieces(z), self._row_counts, strict=True):
-            share = Weights(weights.equality[equality: equality + m_eq],
-                            weights.inequality[inequality: inequality + m_in])
-            blocks.append(t.lagrangian_hessian(piece, share))
-            equality, inequality = equality + m_eq, inequality + m_in
-        hessian = sp.block_diag(blocks).tocsr()
+        shares, links = self._shares(weights)
+        hessian = sp.block_diag([t.lagrangian_hessian(piece, share) for t, piece, share
+                                 in zip(self.phases, self.pieces(z), shares, strict=True)]).tocsr()
         if self.nonlinear:
             function, pattern = self._link_hessian
-            hessian = hessian + pattern.coo(function(z, weights.equality[equality:],
-                                                     weights.inequality[inequality:])).tocsr()
+            hessian = hessian + pattern.coo(function(z, links.equality, links.inequality)).tocsr()
         return hessian
+
+    def curvature_model(self) -> CurvatureModel | None:
+        """The phases' convex curvature models side by side (:meth:`Transcription.curvature_model`), and the
+        nonlinear links', each link its own element; None when every map is affine."""
+        models = [t.curvature_model() for t in self.phases]
+        links = self._link_curvature
+        if links.empty and all(model is None for model in models):
+            return None
+        placed = [(model, offset) for model, offset in zip(models, self.offsets, strict=False) if model is not None]
+        rows = np.concatenate([model.rows + offset for model, offset in placed] + [links.rows])
+        cols = np.concatenate([model.cols + offset for model, offset in placed] + [links.cols])
+
+        def values(z: np.ndarray, weights) -> np.ndarray:
+            shares, link_weights = self._shares(weights)
+            parts = [model.values(piece, share) for model, piece, share
+                     in zip(models, self.pieces(z), shares, strict=True) if model is not None]
+            return np.concatenate(parts + [links.values(z, np.concatenate([link_weights.equality,
+                                                                           link_weights.inequality]))])
+
+        return CurvatureModel(rows, cols, values)
+
+    @cached_property
+    def _link_curvature(self) -> ElementCurvature:
+        """Each nonlinear link its own element."""
+        rows = sum(self._blocks[equality][0].shape[0] for equality in (True, False))
+        return ElementCurvature.of(self._link_hessian, np.arange(rows))
 
     def symbolic_nlp(self) -> SymbolicNLP:
         """Every phase's NLP on its part of one decision vector, and the links (the IPOPT reference reads it)."""

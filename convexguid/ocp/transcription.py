@@ -35,9 +35,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
+from convexguid.ocp.curvature import ElementCurvature, interval_of_rows, lagrangian_hessian
+from convexguid.ocp.guess import flown_free_states
 from convexguid.ocp.parts import AffineCones, Margins, SparsityPattern, SymbolicNLP
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
-from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import ConstraintBlock, CurvatureModel, Evaluation, LinearConstraints, OutputConstraints
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
@@ -285,14 +287,9 @@ class Transcription:
 
     @cached_property
     def _hessian(self) -> tuple[ca.Function, SparsityPattern]:
-        """The exact Lagrangian Hessian and its pattern, built when the engine's end game first asks for it."""
-        z, defect, path, epigraph = self._symbols
-        lam, mu, nu = (ca.SX.sym(name, e.shape[0]) for name, e in (("lam", defect), ("mu", path), ("nu", epigraph)))
-        lagrangian = ca.dot(lam, defect) + (ca.dot(mu, path) if path.shape[0] else 0)
-        if epigraph.shape[0]:
-            lagrangian = lagrangian + ca.dot(nu, epigraph)
-        hessian = ca.hessian(lagrangian, z)[0]
-        return ca.Function("hessian", [z, lam, mu, nu], [hessian]), SparsityPattern(hessian.sparsity())
+        """The exact Lagrangian Hessian and its pattern: a function of ``z`` and the equalities', path rows' and
+        epigraph row's multipliers."""
+        return lagrangian_hessian(self._symbols[0], list(self._symbols[1:]))
 
     @cached_property
     def _weights_per_step(self) -> np.ndarray:
@@ -301,12 +298,12 @@ class Transcription:
     # --- NonconvexProgram -----------------------------------------------------------------------------------
     def initial_guess(self) -> np.ndarray:
         """The user's node values when given (:meth:`~convexguid.ocp.problem.Problem.initial_guess`), else
-        :meth:`initial_guess_straight`."""
+        :meth:`initial_guess_straight`, its free positions flown (:func:`~convexguid.ocp.guess.flown_free_states`)."""
         p, N = self.problem, self.N
         tf = p.tf_guess if self.free_time else p.tf
         if p.guess_nodes is not None and p.guess_nodes[0].shape[0] == N + 1:
             return self.assemble(p.guess_nodes[0], self.values_from_nodes(p.guess_nodes[1]), tf)
-        return self.initial_guess_straight()
+        return flown_free_states(self, self.initial_guess_straight())
 
     def initial_guess_straight(self) -> np.ndarray:
         """States straight from their initial to their final values (the other given one where only one is),
@@ -487,6 +484,17 @@ class Transcription:
                   ("linear_equalities", ca.DM(lin.A.toarray()) @ z - lin.b, 0.0, 0.0),
                   ("linear_inequalities", ca.DM(lin.G.toarray()) @ z - lin.h, -np.inf, 0.0))
         return SymbolicNLP(z, objective, blocks)
+
+    @cached_property
+    def _element_curvature(self) -> ElementCurvature:
+        _, equalities, _, epigraph = self._symbols
+        return ElementCurvature.of(self._hessian, interval_of_rows(self, equalities.shape[0], epigraph.shape[0]))
+
+    def curvature_model(self) -> CurvatureModel | None:
+        """The constraints' exact curvature made convex interval by interval (:mod:`convexguid.ocp.curvature`),
+        weighted by the multipliers of the equalities, the path rows and the epigraph row; None when affine."""
+        inequalities = self.num_path + self._symbols[3].shape[0]
+        return self._element_curvature.model(lambda w: np.concatenate([w.equality, w.inequality[:inequalities]]))
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
         """CasADi's exact :math:`\\sum \\lambda_k \\nabla^2 e_k + \\sum \\mu_j \\nabla^2 g_j` (the energy residuals are

@@ -115,7 +115,7 @@ class SCPAlgorithm:
         self.outputs = program.output_constraints()
         self.scale = program.variable_scale()
         model = getattr(program, "curvature_model", None)
-        self.curvature: CurvatureModel | None = model() if model is not None else None
+        self.curvature: CurvatureModel | None = model() if model is not None else None  # None: affine constraints
         self.second_order: SecondOrderModels | None = None
         self.curved: CurvedSubproblem | None = None
         self.assembler: SubproblemAssembler | CondensedAssembler | None = None
