@@ -24,7 +24,7 @@ with T_min = 1.5. The quaternion's unit norm is no constraint, in OpenSCvx or he
 (IPOPT's optimum: within 7e-5 on 20 Hermite-Simpson intervals, 2e-8 on 20 zero-order-hold intervals); R(q) is
 the quadratic form the file writes (|q|^2 times a rotation). No published optimum: the reference is IPOPT on the
 same transcription (convexguid.ocp.reference.solve_with_ipopt). Today the SCP does not converge here: on the
-default grid it ends max_iterations at 1.60221 (IPOPT 1.603065), the crawl docs/ocp.md describes under known limits.
+default grid it ends max_iterations at 1.60264 (IPOPT 1.603065), the crawl docs/ocp.md describes under known limits.
 Run: python examples/rocket_6dof_pdg.py
 """
 
