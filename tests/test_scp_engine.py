@@ -460,3 +460,20 @@ def test_a_program_brought_by_the_user_reaches_its_closed_form():
     result = solve_scp(load_example("own_program").ClosestPointOnCircle(), SCPSettings())
     assert result.status == "converged", result.message
     assert result.x == pytest.approx([np.sqrt(0.91), 0.3], abs=1e-7)
+
+
+def test_phase_one_stops_at_the_first_point_well_inside_the_feasibility_tolerance():
+    """The elastic phase 1 seeks a feasible point for the main loop, not the violation's minimum: it ends at the
+    first accepted iterate within engine.RESTORED of the tolerance (before, COPS' hang glider spent 140 phase-1
+    iterations taking the violation from 2e-9 to 1e-12)."""
+    from convexguid.scp.restoration import ElasticPhase1
+
+    settings = SCPSettings(penalty=1.0, penalty_max=1.0, penalty_unit="absolute")
+    phase1 = engine.SCPAlgorithm(ElasticPhase1(ShiftedDisk()), settings, phase1=True)
+    state = phase1.initialize(np.array([3.0, 3.0]))  # violation 16
+    while not state.finished:
+        phase1.step(state)
+    accepted = [record.violation for record in state.history if record.accepted]  # each after its step
+    assert accepted[-1] <= engine.RESTORED * settings.feasibility_tolerance < min(accepted[:-1])
+    assert state.status == "converged" and state.message == "feasibility restored"
+    assert phase1.violation(state.ev) <= engine.RESTORED * settings.feasibility_tolerance

@@ -16,7 +16,7 @@ def flown_free_states(program: Transcription, z: np.ndarray) -> np.ndarray:
     position, a range: the integral of other states) flown from its first node by its rate along the guess (forward
     Euler at the nodes, kept within its bounds), instead of held constant. Held constant, a range whose speed is not
     zero starts the SCP with defects it cannot remove within its trust region, and it shortens the final time
-    instead (measured: COPS' hang glider ended `max_iterations` at 332 m; flown, it converges at 1247.9966 m in 231
+    instead (measured: COPS' hang glider ended `max_iterations` at 332 m; flown, it converges at 1247.9966 m in 99
     iterations). A state a control drives stays on the straight line: its rate along the guessed control is a guess
     too (flown at the mid bank angle, Betts' shuttle turned the wrong way and ended `max_iterations`)."""
     p, u = program.problem, program.problem.control_vector()

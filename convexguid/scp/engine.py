@@ -89,6 +89,10 @@ steps. A later stall raises the penalty as usual.
 """
 
 
+RESTORED = 0.01
+"""Phase 1 ends once the violation is within this share of the feasibility tolerance: it seeks a feasible point, not
+the violation's minimum (COPS' hang glider spent 140 phase-1 iterations taking it from 2e-9 to 1e-12)."""
+
 POLISH_ITERATIONS = 20
 """A feasible stall whose KKT residuals are above tolerance goes on polishing (the curved subproblem of
 :mod:`convexguid.scp.curved`, Newton's steps) until it has stalled this many times more; then it is reported
@@ -301,6 +305,9 @@ class SCPAlgorithm:
             measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, ratio, step)
         self.record(state, step, ratio, accepted, result if curved is None else replace(result, status="curved"))
+        if self.phase1 and accepted and max_violation(state.ev) <= RESTORED * s.feasibility_tolerance:
+            state.finish("converged", "feasibility restored")
+            return self._check_limit(state)
         if accepted and kkt_met(self, state):
             finish_optimal(self, state)
             return self._check_limit(state)
