@@ -124,7 +124,8 @@ class ElementCurvature:
         for colours, at, i, j in self._classes:
             blocks = np.empty(at.shape)
             for c, values in enumerate(by_colour):
-                blocks[colours == c] = values[at[colours == c]]  # -1 reads the appended 0
+                mine = colours == c
+                blocks[mine] = values[at[mine]]  # -1 reads the appended 0
             eigenvalues, vectors = np.linalg.eigh(0.5 * (blocks + blocks.transpose(0, 2, 1)))
             positive = np.maximum(eigenvalues, 0.0)
             total = positive.sum(axis=1)

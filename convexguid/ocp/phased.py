@@ -248,7 +248,7 @@ class PhasedProgram:
         links = self._link_curvature
         if links.empty and all(model is None for model in models):
             return None
-        placed = [(model, offset) for model, offset in zip(models, self.offsets, strict=False) if model is not None]
+        placed = [(model, offset) for model, offset in zip(models, self.offsets[:-1], strict=True) if model is not None]
         rows = np.concatenate([model.rows + offset for model, offset in placed] + [links.rows])
         cols = np.concatenate([model.cols + offset for model, offset in placed] + [links.cols])
 

@@ -493,6 +493,8 @@ class Transcription:
     def curvature_model(self) -> CurvatureModel | None:
         """The constraints' exact curvature made convex interval by interval (:mod:`convexguid.ocp.curvature`),
         weighted by the multipliers of the equalities, the path rows and the epigraph row; None when affine."""
+        if self.affine:  # no curvature to model: the Hessian is not even built
+            return None
         inequalities = self.num_path + self._symbols[3].shape[0]
         return self._element_curvature.model(lambda w: np.concatenate([w.equality, w.inequality[:inequalities]]))
 
