@@ -288,24 +288,26 @@ def _unusable(status: str) -> BackendResult:
 
 
 def _flaky_backend(monkeypatch, fails, status: str = "failed") -> list[int]:
-    """Wrap the real backend so that ``solve()`` call number ``k`` (from 1) is unusable when ``fails(k)``.
+    """Wrap the real backends so that ``solve()`` call number ``k`` (from 1, counted over every backend the engine
+    makes: its subproblems' and the curved subproblem's) is unusable when ``fails(k)``.
 
     Returns the list of failed call numbers (filled in as the engine runs).
     """
     real = engine.make_backend
     failed: list[int] = []
+    calls = [0]
 
     class Flaky:
         def __init__(self, inner):
-            self.inner, self.calls = inner, 0
+            self.inner = inner
 
         def update(self, program):
             self.inner.update(program)
 
         def solve(self):
-            self.calls += 1
-            if fails(self.calls):
-                failed.append(self.calls)
+            calls[0] += 1
+            if fails(calls[0]):
+                failed.append(calls[0])
                 return _unusable(status)
             return self.inner.solve()
 
@@ -346,8 +348,9 @@ def test_failures_not_in_a_row_do_not_add_up(monkeypatch, rosenbrock_reference):
     assert len(failed) == 2 * TOLERATED
     assert result.status == "converged", result.message
     np.testing.assert_allclose(result.x, rosenbrock_reference[0], atol=1e-6)
-    # the call after the success may be a second-order correction, whose failure is not a retry
-    assert sum(r.solver_status == "failed" for r in result.history) >= 2 * TOLERATED - 1
+    # the calls after the success may be a curved subproblem's or a second-order correction's, whose failure (the
+    # linear subproblem then solved instead, or the correction dropped) is not a retry
+    assert sum(r.solver_status == "failed" for r in result.history) >= 2 * TOLERATED - 2
 
 
 @pytest.mark.parametrize("extra", [1, 10**6], ids=["one_too_many", "always"])

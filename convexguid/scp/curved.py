@@ -1,11 +1,15 @@
-"""The curved subproblem: the trust-region QP with the Lagrangian's Hessian, made convex (the polish's SQP step).
+"""The curved subproblem: the trust-region QP with the Lagrangian's Hessian, made convex (the end game's SQP step).
 
-The engine's subproblem carries no curvature of the constraints. Far from a solution that is what keeps it
-robust; near one it converges linearly, and when the active set keeps changing (a minimum-time slew whose
-switching times move by a fraction of a node each iteration) the equality-constrained Newton step of
-:mod:`convexguid.scp.newton` never gets its turn. Once the iterates have stalled at a feasible point short of the
-KKT tolerance, the engine therefore solves the QP of sequential quadratic programming instead, whose solver picks
-the active set itself:
+Far from a solution the engine's subproblem carries the program's own sparse curvature model (or none), which
+keeps it robust and cheap. Near a feasible point that model is not enough wherever the curvature that matters lives
+only in the coupling of the constraints: a bilinear term (catalyst mixing's :math:`u x`, a quaternion's
+:math:`\\Omega(\\omega) q`) is indefinite in every interval, yet positive along the dynamics, and a model made
+convex interval by interval keeps none of it; the iteration then converges like a first-order method, its steps
+pinned to the trust region (measured on COPS' catalyst mixing: 112 iterations to ``unverified``, 3.9e-5 short).
+So once the iterate is within :data:`CURVED_VIOLATION` feasibility tolerances of feasibility on a program of at most
+:data:`CURVED_SIZE` variables and the last linear step reached its trust region (the model had no curvature to stop
+it), and at any feasible stall short of the KKT tolerance, the engine solves the QP of
+sequential quadratic programming instead, whose solver picks the active set itself:
 
 .. math::
 
@@ -38,10 +42,34 @@ if TYPE_CHECKING:
     from convexguid.scp.engine import SCPAlgorithm
     from convexguid.scp.state import IterationState
 
-AUGMENTATION = 10.0
-""":math:`\\gamma` in units of the Hessian's largest entry over the working rows' median squared norm."""
+AUGMENTATION = 1e3
+""":math:`\\gamma` in units of the Hessian's largest entry over the working rows' median squared norm, near
+feasibility. Measured on the classics with the curved step at every iteration within :data:`CURVED_VIOLATION`
+(before it waited for a pinned step; catalyst mixing, Goddard's rocket, the hang glider: SCP iterations): at 10,
+102 (``unverified``), 29, 52; at 100, 61, 26, 51; at 1e3, 29, 23, 51; at 1e4, 26, 26, 56 (the augmentation then
+crowds out the reduced Hessian's own eigenvalues)."""
 
-def convexified(hessian: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, float]:
+POLISH_AUGMENTATION = 10.0
+""":math:`\\gamma` at a feasible stall (the polish). Measured: the flat slew with its torque box and sun cone both
+active (tests/test_verified_loop.py), whose multipliers are not unique, is proved a KKT point at 10; at 1e3 its
+polish collapsed the trust region 2.1e-5 short of stationarity."""
+
+CURVED_VIOLATION = 10.0
+"""Within this many feasibility tolerances of feasibility, a small program's pinned iterations take the curved step.
+Measured with every iteration there taking it (catalyst mixing, Goddard's rocket, the hang glider: SCP iterations;
+Betts' shuttle: its crossrange) from a violation of 1e-4, 1e-5, 1e-6 and 1e-7 (the tolerance): 13, 11, 32, and the
+shuttle at 34.0803 deg, 1.8e-3 short of Betts' figure (a lower local optimum, where IPOPT's 34.0613 is too); 18,
+12, 51; 29, 23, 51, and the shuttle at 34.14087 deg; 37, 18, 50, the shuttle the same. Waiting for a pinned step
+as well (OpenSCvx's proximity operation, examples/proxops_openscvx.py, stalled ``unverified`` after curved steps
+it did not need): 29, 33, 56."""
+
+CURVED_SIZE = 600
+"""Largest program (variables) whose iterations near feasibility all take the curved step: its Hessian, the
+eigendecomposition and the QP are dense. Measured (the step taken from a violation of 1e-4): Betts' slew (1311
+variables) took 990 s so, against 5 s with the sparse model (the same plan, 24 iterations against 18); larger
+programs take it only at a feasible stall."""
+
+def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION) -> tuple[np.ndarray, float]:
     """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows``, its negative eigenvalues raised to
     zero (the trust region bounds the step where no curvature does); and :math:`\\gamma`."""
     H = 0.5 * (hessian + hessian.T)
@@ -50,7 +78,7 @@ def convexified(hessian: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, floa
     if rows.shape[0]:
         norms = np.linalg.norm(rows, axis=1)
         typical = float(np.median(norms[norms > 0])) if np.any(norms > 0) else 1.0
-        gamma = AUGMENTATION * size / typical**2
+        gamma = weight * size / typical**2
         H = H + gamma * (rows.T @ rows)
     values, vectors = np.linalg.eigh(H)
     if values[0] < 0.0:
@@ -104,6 +132,14 @@ class CurvedSubproblem:
         choice = self.algo.choice
         return ("daqp", "clarabel") if choice is not None and choice.backend == "daqp" else ("clarabel", None)
 
+    def wanted(self, state: IterationState) -> bool:
+        """Whether this iteration takes the curved step: at a feasible stall short of the KKT tolerance (the polish),
+        or on a small program near feasibility (see the module docstring)."""
+        algo = self.algo
+        near = algo.violation(state.ev) <= CURVED_VIOLATION * algo.settings.feasibility_tolerance
+        return bool(state.polish) or (near and state.pinned and not algo.phase1
+                                      and algo.program.num_variables <= CURVED_SIZE)
+
     @staticmethod
     def applies(algo: SCPAlgorithm, first: Evaluation) -> bool:
         """The program has an end game (a Hessian to use) and no second-order cones (the condensed QP has none)."""
@@ -118,7 +154,8 @@ class CurvedSubproblem:
                                                                 algo.settings.feasibility_tolerance, state.penalty),
                                   state.multipliers)
         model = algo.second_order.at(state.x, state.raw, state.multipliers, working)
-        return CurvedModel(*convexified(model.hessian, model.rows), model.rows, working)
+        weight = POLISH_AUGMENTATION if state.polish else AUGMENTATION
+        return CurvedModel(*convexified(model.hessian, model.rows, weight), model.rows, working)
 
     def solve(self, state: IterationState, ev: Evaluation, model: CurvedModel) -> tuple[BackendResult, float]:
         """The backend's answer and the model's merit after its step (as the engine's own subproblem gives them);

@@ -24,7 +24,9 @@ The objective's residuals are linearized (Gauss-Newton); a program may add a con
 curvature (``curvature_model``, weighted by the last multipliers: an S :math:`\\ell_1` QP step, Fletcher 1985). A
 step the merit refuses may still be taken by a funnel on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`).
 Near a feasible point the end game (:mod:`convexguid.scp.newton`) also proposes Newton's step on the working set the
-subproblems agree on, with the exact Hessian of the Lagrangian.
+subproblems agree on, with the exact Hessian of the Lagrangian; and a small program's subproblem there is the curved
+one (:mod:`convexguid.scp.curved`): that Hessian made convex on the working rows, with which the QP's own solver picks
+the active set.
 
 Statuses (:mod:`convexguid.scp.optimality`): ``converged`` only when the KKT conditions hold at a feasible
 iterate (:mod:`convexguid.scp.kkt`, stationarity and complementarity relative to the objective within
@@ -92,6 +94,9 @@ steps. A later stall raises the penalty as usual.
 RESTORED = 0.01
 """Phase 1 ends once the violation is within this share of the feasibility tolerance: it seeks a feasible point, not
 the violation's minimum (COPS' hang glider spent 140 phase-1 iterations taking it from 2e-9 to 1e-12)."""
+
+PINNED = 0.9
+"""A linear subproblem's step of at least this share of the trust radius reached it (see ``IterationState.pinned``)."""
 
 POLISH_ITERATIONS = 20
 """A feasible stall whose KKT residuals are above tolerance goes on polishing (the curved subproblem of
@@ -233,8 +238,8 @@ class SCPAlgorithm:
         state.iteration += 1
         self._relax_penalty(state)
         hessian = curved = None
-        if state.polish and self.curved is not None:
-            # stalled short of the KKT tolerance: the SQP step with the convexified Lagrangian Hessian
+        if self.curved is not None and self.curved.wanted(state):
+            # near feasibility, or stalled short of the KKT tolerance: the SQP step with the convexified Hessian
             curved = self.curved.hessian(state)
         if self.curvature is not None and state.multipliers is not None:
             hessian = self._curvature_values(state)
@@ -283,6 +288,8 @@ class SCPAlgorithm:
                     x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
                     d = x_new - state.x
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
+        if curved is None:
+            state.pinned = step >= PINNED * state.radius
         if newton is not None:
             if newton.ratio < s.accept_ratio:
                 state.newton_radius = 0.25 * newton.step
