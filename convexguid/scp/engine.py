@@ -289,7 +289,7 @@ class SCPAlgorithm:
                     d = x_new - state.x
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
         if curved is None:
-            state.pinned = step >= PINNED * state.radius
+            state.pinned = state.pinned + 1 if step >= PINNED * state.radius else 0
         if newton is not None:
             if newton.ratio < s.accept_ratio:
                 state.newton_radius = 0.25 * newton.step

@@ -58,8 +58,8 @@ class IterationState:
     working_set: WorkingSet | None = None
     escapes: int = 0
     polish: int = 0
-    pinned: bool = False
-    """The last linear subproblem's step reached its trust region: its model lacks the curvature that would stop it."""
+    pinned: int = 0
+    """Linear subproblems in a row whose step reached the trust region: the model lacks the curvature to stop it."""
     escape_log: list[str] = field(default_factory=list)
     iteration: int = 0
     failures: int = 0
