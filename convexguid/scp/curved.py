@@ -70,7 +70,7 @@ dense curved QPs), against 6 and 0.08 s; at 2 and 3 catalyst mixing, Goddard's r
 same 29, 33 and 56 iterations as at 1, and the flat slew its 6."""
 
 CURVED_SIZE = 600
-"""Largest program (variables) whose iterations near feasibility all take the curved step: its Hessian, the
+"""Largest program (variables) that takes the curved step near feasibility (once pinned): its Hessian, the
 eigendecomposition and the QP are dense. Measured (the step taken from a violation of 1e-4): Betts' slew (1311
 variables) took 990 s so, against 5 s with the sparse model (the same plan, 24 iterations against 18); larger
 programs take it only at a feasible stall."""
@@ -140,7 +140,8 @@ class CurvedSubproblem:
 
     def wanted(self, state: IterationState) -> bool:
         """Whether this iteration takes the curved step: at a feasible stall short of the KKT tolerance (the polish),
-        or on a small program near feasibility (see the module docstring)."""
+        or on a small program near feasibility whose linear steps keep reaching the trust region (see the module
+        docstring)."""
         algo = self.algo
         near = algo.violation(state.ev) <= CURVED_VIOLATION * algo.settings.feasibility_tolerance
         return bool(state.polish) or (near and state.pinned >= CRAWL and not algo.phase1

@@ -24,9 +24,9 @@ The objective's residuals are linearized (Gauss-Newton); a program may add a con
 curvature (``curvature_model``, weighted by the last multipliers: an S :math:`\\ell_1` QP step, Fletcher 1985). A
 step the merit refuses may still be taken by a funnel on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`).
 Near a feasible point the end game (:mod:`convexguid.scp.newton`) also proposes Newton's step on the working set the
-subproblems agree on, with the exact Hessian of the Lagrangian; and a small program's subproblem there is the curved
-one (:mod:`convexguid.scp.curved`): that Hessian made convex on the working rows, with which the QP's own solver picks
-the active set.
+subproblems agree on, with the exact Hessian of the Lagrangian; and once a small program's linear steps keep reaching
+the trust region there, its subproblem is the curved one (:mod:`convexguid.scp.curved`): that Hessian made convex on
+the working rows, with which the QP's own solver picks the active set.
 
 Statuses (:mod:`convexguid.scp.optimality`): ``converged`` only when the KKT conditions hold at a feasible
 iterate (:mod:`convexguid.scp.kkt`, stationarity and complementarity relative to the objective within
