@@ -31,7 +31,8 @@ is linear between nodes, so its box holds everywhere); keep-out cones
 :math:`b^T C_{BI}(q) r \\le \\cos(\\theta + m)` and keep-in cones
 :math:`b^T C_{BI}(q) r \\ge \\cos(\\alpha - m)` at the nodes and at the Hermite-Simpson
 interval midpoints (the rate box too, at the midpoints), with a margin :math:`m` that
-is raised when the dense check finds the path cutting a cone's edge between nodes; the
+is raised when the dense check finds the path cutting a cone's edge between nodes (as the program's repair
+margins, :func:`tightened`: the problem is stated and built once); the
 forbidden attitude :math:`|q_b \\cdot q| \\le \\cos((\\theta_m + m)/2)`, two rows per node and midpoint.
 
 **Objectives.** Minimum time (:math:`\\min t_f`) or minimum energy at fixed :math:`t_f`
@@ -61,6 +62,7 @@ from convexguid.geometry import PointingCone, eigenaxis_rotation
 from convexguid.ocp import Problem
 from convexguid.ocp.attitude import rigid_body_dynamics
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
+from convexguid.ocp.parts import Margins
 from convexguid.rotations import axis_angle_to_quat, quat_conjugate, quat_multiply
 from convexguid.scp.problem import ProgramSize
 
@@ -239,6 +241,35 @@ class Slew:
         return LinearTorque(self.times(x), self.program.node_controls(x))
 
 
+def tightened(slew: Slew, case: AttitudeCase, margin: float) -> Slew:
+    """``slew`` with its node constraints tightened by ``margin`` (rad) and its rate box to ``case.rate_max``, as
+    the repair margins of its own program (:meth:`~convexguid.ocp.transcription.Transcription.with_margins`: the
+    symbolic build, its derivatives and the Hessian shared, not built again). Each row's margin is what moves its
+    bound there: :math:`\\cos\\theta - \\cos(\\theta + m)` for a keep-out cone, :math:`\\cos(\\alpha - m) -
+    \\cos\\alpha` for a keep-in cone, :math:`\\cos(\\theta_m/2) - \\cos((\\theta_m + m)/2)` for a forbidden
+    attitude, the rate bound's decrease over the stated bound for a midpoint rate row and the decrease itself for
+    the node rate box."""
+    base, program = slew.case, slew.program
+    if slew.margin:
+        raise ValueError("tighten the untightened slew: margins replace, they do not add up")
+    per_constraint = []
+    for cone in base.cones:
+        if cone.keep_out:
+            per_constraint.append(np.cos(cone.half_angle_rad) - np.cos(min(np.pi, cone.half_angle_rad + margin)))
+        else:
+            per_constraint.append(np.cos(max(0.0, cone.half_angle_rad - margin)) - np.cos(cone.half_angle_rad))
+    for fb in base.forbidden:
+        per_constraint += 2 * [np.cos(fb.min_angle / 2) - np.cos(min(np.pi, fb.min_angle + margin) / 2)]
+    rate_cut = 0.0 if base.rate_max is None else base.rate_max - case.rate_max
+    if base.rate_max is not None:
+        per_constraint += 6 * [rate_cut / base.rate_max]
+    per_constraint = np.asarray(per_constraint, dtype=float)
+    bounds = np.zeros((program.N + 1, NX))
+    bounds[:, 4:7] = rate_cut
+    margins = Margins(per_constraint[[j for _, _, j in program.path_rows]], bounds.ravel())
+    return Slew(case, margin, program.with_margins(margins))
+
+
 def transcribe_slew(case: AttitudeCase, intervals: int, guess: np.ndarray, tf_guess: float,
                     margin: float = 0.0) -> Slew:
     """The case stated on :mod:`convexguid.ocp` (:func:`attitude_problem`, node constraints tightened by ``margin``,
@@ -247,17 +278,17 @@ def transcribe_slew(case: AttitudeCase, intervals: int, guess: np.ndarray, tf_gu
     times :func:`natural_rate` over the guessed duration."""
     rate_scale = RATE_SCALE_FACTOR * natural_rate(case, tf_guess)
     guess = np.asarray(guess, dtype=float).reshape(intervals + 1, NODE)
-    problem = attitude_problem(case, intervals, tf_guess, rate_scale, margin)
+    problem = attitude_problem(case, intervals, tf_guess, rate_scale)
     problem.initial_guess(guess[:, :NX], guess[:, NX:])
-    return Slew(case, margin, HermiteSimpsonProgram(problem))
+    slew = Slew(case, 0.0, HermiteSimpsonProgram(problem))
+    return tightened(slew, case, margin) if margin else slew
 
 
-def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_scale: float,
-                     margin: float = 0.0) -> Problem:
+def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_scale: float) -> Problem:
     """The slew as a :class:`convexguid.ocp.Problem` (see the module docstring): states ``q1..q4`` (scale 1),
     ``w1..w3`` (``rate_scale``, the rate box a hard bound at the nodes), torques ``u1..u3`` (their boxes, scaled by
     them); the final attitude as the quaternion error's vector part; each cone, forbidden attitude and the rate box
-    between nodes as path constraints tightened by ``margin``."""
+    between nodes as path constraints (a repair tightens them by the program's margins, :func:`tightened`)."""
     p = Problem(case.name)
     q = [p.state(f"q{i + 1}", initial=float(case.q0[i]), scale=1.0) for i in range(4)]
     rate_box = None if case.rate_max is None else (-case.rate_max, case.rate_max)
@@ -273,14 +304,12 @@ def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_s
     for cone in case.cones:
         cosine = cone_cosine_expression(attitude, cone)
         if cone.keep_out:
-            p.path_constraint(f"{cone.kind}_{cone.name}", cosine - np.cos(min(np.pi, cone.half_angle_rad + margin)),
-                              "cos")
+            p.path_constraint(f"{cone.kind}_{cone.name}", cosine - np.cos(cone.half_angle_rad), "cos")
         else:
-            p.path_constraint(f"{cone.kind}_{cone.name}", np.cos(max(0.0, cone.half_angle_rad - margin)) - cosine,
-                              "cos")
+            p.path_constraint(f"{cone.kind}_{cone.name}", np.cos(cone.half_angle_rad) - cosine, "cos")
     for fb in case.forbidden:
         # linear in q, but penalized like the cones: a guess may pass through the forbidden attitude
-        bound = np.cos(min(np.pi, fb.min_angle + margin) / 2)
+        bound = np.cos(fb.min_angle / 2)
         dot = ca.dot(ca.DM(fb.q), attitude)
         p.path_constraint(f"forbidden_{fb.name}", dot - bound, "cos")
         p.path_constraint(f"forbidden_{fb.name}_opposite", -dot - bound, "cos")

@@ -27,6 +27,7 @@ from convexguid.families.quaternion_attitude.program import (
     Slew,
     eigenaxis_guess,
     eigenaxis_start,
+    tightened,
     transcribe_slew,
 )
 from convexguid.geometry import PointingCone
@@ -149,8 +150,8 @@ class QuaternionChecker:
             step = np.radians(grown_margin(1.5 * rate_excess, attempt, 0.0))
             tight_case = replace(tight_case, rate_max=tight_case.rate_max - step)
             done.append(f"rate bound -{np.degrees(step):.3g} deg/s")
-        self.latest = transcribe_slew(tight_case, slew.intervals, slew.nodes(x), program.final_time(x), margin)
-        return Repair(self.latest.program, self.latest.program.initial_guess(), "; ".join(done))
+        self.latest = tightened(self.first, tight_case, margin)
+        return Repair(self.latest.program, x, "; ".join(done))
 
 
 CONE_MARGIN_FLOOR_DEG = 0.02
