@@ -64,6 +64,10 @@ class _NearestOnCircle:
         cone = ConeBlock("distance", np.array([t, x - 3.0, y - 4.0]), sp.coo_matrix(np.eye(3)), (3,))
         return Evaluation(np.zeros(0), np.zeros((0, 3)) if jacobians else None, (), (circle,), (cone,))
 
+    def lagrangian_hessian(self, v, weights):
+        """The circle's curvature (the cone is affine), weighted: the end game's."""
+        return np.diag([0.0, 2.0, 2.0]) * weights.equality[0]
+
 
 def test_the_engine_keeps_a_cone_exact():
     program = _NearestOnCircle()

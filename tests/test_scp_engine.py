@@ -127,6 +127,18 @@ class HS071Epigraph(_SmallProgram):
                           ConstraintBlock("product", np.array([25.0 - x1 * x2 * x3 * x4]), j_prod)),
             equalities=(ConstraintBlock("sum_of_squares", np.array([x @ x - 40.0]), j_sq),))
 
+    def lagrangian_hessian(self, z: np.ndarray, weights) -> np.ndarray:
+        """The epigraph's, the product's and the sphere's second derivatives, weighted (the end game's)."""
+        x1, x2, x3, x4 = z[:4]
+        (epigraph, product), (sphere,) = weights.inequality, weights.equality
+        objective = np.array([[2 * x4, x4, x4, 2 * x1 + x2 + x3], [x4, 0, 0, x1], [x4, 0, 0, x1],
+                              [2 * x1 + x2 + x3, x1, x1, 0]])
+        product_terms = -np.array([[0, x3 * x4, x2 * x4, x2 * x3], [x3 * x4, 0, x1 * x4, x1 * x3],
+                                   [x2 * x4, x1 * x4, 0, x1 * x2], [x2 * x3, x1 * x3, x1 * x2, 0]])
+        hessian = np.zeros((5, 5))
+        hessian[:4, :4] = epigraph * objective + product * product_terms + 2.0 * sphere * np.eye(4)
+        return hessian
+
 
 # The epigraph objective is linear and the inequalities carry no curvature, so every subproblem
 # is an LP and the optimum is not a vertex: x converges only like the square root of the
@@ -179,6 +191,10 @@ class RosenbrockDisk(_SmallProgram):
                                np.array([[2.0 * x, 2.0 * y]]) if jacobians else None)
         return Evaluation(residuals, jac, inequalities=(disk,))
 
+    def lagrangian_hessian(self, z: np.ndarray, weights) -> np.ndarray:
+        """The second residual's curvature -20 along x and the disk's 2 I, weighted."""
+        return np.diag([-20.0 * weights.residual[1], 0.0]) + 2.0 * weights.inequality[0] * np.eye(2)
+
 
 def rosenbrock(v: np.ndarray) -> float:
     return float((1.0 - v[0]) ** 2 + 100.0 * (v[1] - v[0] ** 2) ** 2)
@@ -226,6 +242,9 @@ class ShiftedDisk(_SmallProgram):
     def evaluate(self, z: np.ndarray, jacobians: bool = True) -> Evaluation:
         disk = ConstraintBlock("disk", np.array([z @ z - 2.0]), 2.0 * z[None, :] if jacobians else None)
         return Evaluation(z - 3.0, np.eye(2) if jacobians else None, inequalities=(disk,))
+
+    def lagrangian_hessian(self, z: np.ndarray, weights) -> np.ndarray:
+        return 2.0 * weights.inequality[0] * np.eye(2)
 
 
 def _spy_on_penalty(monkeypatch) -> list[float]:

@@ -31,7 +31,7 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 
-from convexguid.scp.lagrangian import CurvatureWeights, LagrangianHessian, Multipliers, WorkingSet, objective_gradient
+from convexguid.scp.lagrangian import CurvatureWeights, Multipliers, WorkingSet, objective_gradient
 from convexguid.scp.problem import Evaluation, NonconvexProgram, OutputConstraints
 
 RANK_TOLERANCE = 1e-6
@@ -137,7 +137,7 @@ class SecondOrderModels:
 
     def __init__(self, program: NonconvexProgram, first: Evaluation, scale: np.ndarray, weights: np.ndarray,
                  cost: np.ndarray, outputs: OutputConstraints) -> None:
-        self.hessians = LagrangianHessian(program, first, scale)
+        self.hessian = program.lagrangian_hessian
         self.linear = program.linear_constraints()
         self.scale, self.weights, self.cost, self.outputs = scale, weights, cost, outputs
 
@@ -158,7 +158,8 @@ class SecondOrderModels:
     def at(self, x: np.ndarray, raw: Evaluation, multipliers: Multipliers, working: WorkingSet) -> LocalModel:
         """The model at ``x`` (``raw``: the program's evaluation there, with Jacobians) on ``working``."""
         omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs.M)
-        curvature = self.hessians.curvature(x, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
+        curvature = sp.csr_matrix(self.hessian(x, CurvatureWeights(omega, multipliers.inequality,
+                                                                   multipliers.equality)))
         hessian = self.gauss_newton(raw) + curvature.multiply(np.outer(self.scale, self.scale)).toarray()
         gradient = objective_gradient(raw, self.weights, self.cost)
         rows = (working.rows(raw, self.linear, self.outputs) @ sp.diags(self.scale)).toarray()

@@ -184,7 +184,8 @@ class SCPAlgorithm:
                                        curvature=None if self.curvature is None
                                        else (self.curvature.rows, self.curvature.cols))
             n = self.program.num_variables
-            if self.settings.second_order and jacobian_structure(raw, n).nnz and n <= MAX_DENSE_SIZE:
+            if (self.settings.second_order and hasattr(self.program, "lagrangian_hessian")
+                    and jacobian_structure(raw, n).nnz and n <= MAX_DENSE_SIZE):
                 self.second_order = SecondOrderModels(self.program, raw, self.scale, self.weights, self.cost,
                                                       self.outputs)
                 if CurvedSubproblem.applies(self, raw):

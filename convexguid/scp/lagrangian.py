@@ -13,7 +13,7 @@ curvature: with the multipliers :math:`(\\omega, \\mu, \\lambda)` of the last su
 
 where :math:`\\omega = 2 W r + M^T \\nu` collects the objective's and the output constraints' weight
 on the residuals. The first term is the Gauss-Newton part every subproblem already has; this module
-supplies the rest (:meth:`LagrangianHessian.curvature`) and makes the sum convex where it is not
+reads the rest from the program and makes the sum convex where it is not
 (:func:`convexified`): the quadratic subproblem must stay convex for the conic solvers, and it
 only needs to be convex on the directions the active constraints leave free. Adding
 :math:`\\gamma A^T A` over the active constraint rows :math:`A` does not change the model on those
@@ -24,15 +24,9 @@ a multiple of the identity is added (Levenberg; Nocedal & Wright Sec. 3.4) and t
 negative curvature is kept: a stationary point with one is not a minimum
 (:func:`negative_curvature`).
 
-**Second derivatives.** A program may give the curvature term itself (``lagrangian_hessian(x,
-weights)``, exact where its maps are symbolic). Otherwise it is computed from the program's own
-Jacobians by differences of the gradient :math:`J^T y` along a few combined directions: columns
-that share no row of the Hessian's sparsity pattern, nor a neighbour in it, are perturbed together
-(a distance-2 colouring: Gebremedhin, Manne & Pothen, "What color is your Jacobian?", SIAM Review
-47(4), 2005), and columns that touch nearly every row (a free final time) alone. Forward
-differences with steps of :data:`DIFFERENCE_STEP` in scaled units leave errors near
-:math:`10^{-7}` relative: Newton's method then converges superlinearly all the same, and the
-converged point is fixed by the KKT conditions, not by the Hessian.
+**Second derivatives** come from the program (``lagrangian_hessian(x, weights)``, exact: CasADi's for every
+``convexguid.ocp`` problem, the families' own): a program without one gets no end game, and no Hessian is
+differenced in the loop.
 """
 
 from __future__ import annotations
@@ -42,13 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.scp.problem import Evaluation, LinearConstraints, NonconvexProgram, OutputConstraints
-
-DIFFERENCE_STEP = 1e-7
-"""Forward-difference step of the Hessian, in scaled variables (whose trust box is about 1)."""
-
-DENSE_COLUMN_FACTOR = 4.0
-"""A column whose Hessian row reaches more than this many times the median row's columns is differenced alone."""
+from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
 
 MAX_DENSE_SIZE = 3000
 """Programs with more variables keep the first-order model (the end game works on dense matrices)."""
@@ -144,95 +132,6 @@ def jacobian_structure(ev: Evaluation, n: int) -> sp.csr_matrix:
     stacked = sp.vstack(rows).tocsr()
     stacked.data[:] = 1.0
     return stacked
-
-
-class LagrangianHessian:
-    """The curvature :math:`\\sum\\omega_i\\nabla^2 r_i + \\sum\\mu_j\\nabla^2 g_j + \\sum\\lambda_k\\nabla^2 e_k`.
-
-    Exact when the program has ``lagrangian_hessian(x, weights)``; otherwise forward differences of
-    :func:`lagrangian_gradient` along the colour groups of the pattern (see the module docstring).
-    ``pattern`` is the symmetric boolean pattern every curvature term fits in.
-    """
-
-    def __init__(self, program: NonconvexProgram, first: Evaluation, scale: np.ndarray) -> None:
-        self.program, self.scale = program, scale
-        n = program.num_variables
-        structure = jacobian_structure(first, n)
-        pattern = (structure.T @ structure).tocsr()
-        pattern.data[:] = 1.0
-        self.pattern = pattern
-        self.exact = getattr(program, "lagrangian_hessian", None)
-        self.groups = [] if self.exact is not None else _colour_groups(pattern)
-        self._alone = np.zeros(n, dtype=bool)
-        for group, alone in self.groups:
-            self._alone[group] = alone
-
-    @property
-    def evaluations(self) -> int:
-        """Program evaluations one finite-difference Hessian costs (0 when the program gives it exactly)."""
-        return len(self.groups)
-
-    def curvature(self, x: np.ndarray, weights: CurvatureWeights) -> sp.csr_matrix:
-        """The curvature term at ``x`` (symmetric, within :attr:`pattern`)."""
-        if self.exact is not None:
-            return sp.csr_matrix(self.exact(x, weights))
-        n = x.size
-        rows, cols, vals = [], [], []
-        base = lagrangian_gradient(self.program.evaluate(x, True), weights)
-        for group, alone in self.groups:
-            direction = np.zeros(n)
-            step = DIFFERENCE_STEP * self.scale[group]
-            direction[group] = step
-            change = lagrangian_gradient(self.program.evaluate(x + direction, True), weights) - base
-            for j, h in zip(group, step, strict=True):
-                reach = self.pattern.indices[self.pattern.indptr[j]: self.pattern.indptr[j + 1]]
-                if alone:
-                    # a lone column: its whole column, mirrored into the rows the grouped passes skip
-                    mirror = reach[~self._alone[reach]]
-                    rows += [reach, np.full(mirror.size, j)]
-                    cols += [np.full(reach.size, j), mirror]
-                    vals += [change[reach] / h, change[mirror] / h]
-                else:
-                    # row i of the difference belongs to the one column of the group it neighbours
-                    reach = reach[~self._alone[reach]]
-                    rows.append(reach)
-                    cols.append(np.full(reach.size, j))
-                    vals.append(change[reach] / h)
-        if not rows:
-            return sp.csr_matrix((n, n))
-        hessian = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
-        # every off-diagonal entry was read twice (once from each of its columns): the mean of the two
-        return (0.5 * (hessian + hessian.T)).tocsr()
-
-
-def _colour_groups(pattern: sp.csr_matrix) -> list[tuple[np.ndarray, bool]]:
-    """Column groups for differencing the Hessian: ``(columns, alone)``.
-
-    Columns whose row reaches more than :data:`DENSE_COLUMN_FACTOR` times the median row's columns, or half
-    the columns, are differenced alone (``alone=True``: their whole column is read off). The others are
-    coloured greedily so that no two columns of a group are within distance two in the pattern's graph
-    without the lone columns: every row then sees at most one column of the group, and its difference
-    belongs to that column.
-    The entries between a lone column and the others are read off the lone column's difference.
-    """
-    degree = np.diff(pattern.indptr)
-    alone = degree > max(min(DENSE_COLUMN_FACTOR * float(np.median(degree)), 0.5 * degree.size), 8)
-    groups: list[tuple[np.ndarray, bool]] = [(np.array([j]), True) for j in np.flatnonzero(alone)]
-    keep = ~alone
-    reduced = pattern[keep][:, keep].tocsr()
-    index = np.flatnonzero(keep)
-    two_step = (reduced @ reduced).tocsr()
-    colour = np.full(index.size, -1)
-    for v in range(index.size):
-        near = two_step.indices[two_step.indptr[v]: two_step.indptr[v + 1]]
-        used = set(colour[near][colour[near] >= 0].tolist())
-        c = 0
-        while c in used:
-            c += 1
-        colour[v] = c
-    for c in range(colour.max(initial=-1) + 1):
-        groups.append((index[colour == c], False))
-    return groups
 
 
 @dataclass(frozen=True)

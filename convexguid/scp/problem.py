@@ -169,8 +169,8 @@ class NonconvexProgram(Protocol):
     subproblem then carries once the first has given multipliers. ``lagrangian_hessian(x, weights) -> matrix``,
     the exact
     :math:`\\sum \\omega_i \\nabla^2 r_i + \\sum \\mu_j \\nabla^2 g_j + \\sum \\lambda_k \\nabla^2 e_k` for
-    :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``; without it the engine differences the
-    program's Jacobians (:class:`~convexguid.scp.lagrangian.LagrangianHessian`).
+    :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``: the end game's (:mod:`convexguid.scp.newton`,
+    :mod:`convexguid.scp.curved`); without it there is none.
     ``A`` and ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``. ``affine``: True when every
     nonlinear map is in fact affine (the subproblem is then the program itself: the first step takes the widest
     trust region, and the problem is solved by one convex program and confirmed by the next).
