@@ -23,7 +23,7 @@ from scipy.integrate import solve_ivp
 from convexguid.ocp.boundary import boundary_errors
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.mesh import JUMP_SHARE, control_jumps, held_control, plan_refinement, refined_program
-from convexguid.ocp.parts import Margins
+from convexguid.ocp.parts import Margins, NumericFunction
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
@@ -76,14 +76,14 @@ class DenseChecker:
         return held_control(program, z)
 
     def propagate(self, program: Transcription, z: np.ndarray) -> DenseTrack:
-        rate = program.rate
+        rate = NumericFunction(program.rate)
         u = self.control(program, z)
         node_times = program.final_time(z) * program.node_shares()
         state = program.states(z)[0].copy()
         times, states = [], []
         for k in range(program.N):
             grid = np.linspace(node_times[k], node_times[k + 1], self.points + 1)
-            run = solve_ivp(lambda t, x: np.asarray(rate(x, u(t), t)).ravel(), (grid[0], grid[-1]), state,
+            run = solve_ivp(lambda t, x: rate(x, u(t), t), (grid[0], grid[-1]), state,
                             method="DOP853", t_eval=grid, rtol=1e-10, atol=1e-12)
             keep = slice(None) if k == 0 else slice(1, None)
             times.append(run.t[keep])
@@ -202,11 +202,10 @@ class DenseChecker:
         when every state and control moves by its own scale. A path equality is judged in it, as the defects are in
         the states' scales: the singular arc of Goddard's rocket, a balance of forces near 100 lbf, drifts by 1e-5
         lbf between nodes however fine the grid."""
-        reach = program.equality_magnitudes
-        if reach is None:
+        if program.equality_magnitudes is None:
             return {}
-        largest = np.max([np.asarray(reach(x, u, t), dtype=float).ravel()
-                          for t, x, u in zip(track.t, track.x, track.u, strict=True)], axis=0)
+        reach = NumericFunction(program.equality_magnitudes)
+        largest = np.max([reach(x, u, t) for t, x, u in zip(track.t, track.x, track.u, strict=True)], axis=0)
         indices = [j for j, c in enumerate(program.problem.constraints) if c.equality]
         return {j: float(m) if m > 0 else 1.0 for j, m in zip(indices, largest, strict=True)}
 
@@ -217,10 +216,9 @@ class DenseChecker:
         ``-inf`` on the samples outside it."""
         p = program.problem
         out: dict[tuple, np.ndarray] = {}
-        g = program.constraint_values
-        if g is not None:
-            values = np.array([np.asarray(g(x, u, t)).ravel() for t, x, u in zip(track.t, track.x, track.u,
-                                                                                 strict=True)])
+        if program.constraint_values is not None:
+            g = NumericFunction(program.constraint_values)
+            values = np.array([g(x, u, t) for t, x, u in zip(track.t, track.x, track.u, strict=True)])
             share = track.t / track.t[-1]
             magnitude = DenseChecker._equality_magnitudes(program, track)
             nearest_node = np.min(np.abs(share[:, None] - program.node_shares()[None, :]), axis=1) < 1e-9

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from convexguid.errors import SpecError
+from convexguid.ocp.parts import NumericFunction
 
 if TYPE_CHECKING:  # the transcriptions import this module
     from convexguid.ocp.problem import Problem
@@ -98,9 +99,9 @@ def interval_flows(program: Transcription, z: np.ndarray, control=None) -> list:
     """Each interval integrated from its own start node under ``control`` (default :func:`held_control`) with DOP853
     (rtol 1e-10), SciPy's result with its dense output ``sol``, one per interval."""
     u = held_control(program, z) if control is None else control
-    rate, scales = program.rate, program.state_scales
+    rate, scales = NumericFunction(program.rate), program.state_scales
     states, times = program.states(z), program.final_time(z) * program.node_shares()
-    return [solve_ivp(lambda t, x: np.asarray(rate(x, u(t), t)).ravel(), (times[k], times[k + 1]), states[k],
+    return [solve_ivp(lambda t, x: rate(x, u(t), t), (times[k], times[k + 1]), states[k],
                       method="DOP853", rtol=1e-10, atol=1e-12 * scales, dense_output=True) for k in range(program.N)]
 
 

@@ -32,6 +32,31 @@ def coo_pattern(pattern: ca.Sparsity) -> sp.coo_matrix:
     return sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=pattern.shape)
 
 
+class NumericFunction:
+    """A CasADi function of column vectors evaluated on numbers through its buffers (``Function.buffer``), its first
+    output returned as a dense numpy vector. About a microsecond a call against 30 for a call with numpy arrays
+    (measured on a Clohessy-Wiltshire rate): the dense check calls the dynamics some 10^5 times on a 600-interval
+    plan. One instance is not for two threads at once (its buffers are its own)."""
+
+    def __init__(self, function: ca.Function) -> None:
+        self._inputs = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
+        self._values = np.zeros(function.nnz_out(0))
+        self._rows = np.asarray(function.sparsity_out(0).get_triplet()[0], dtype=int)
+        self._size = function.size1_out(0)
+        self._buffer, self._trigger = function.buffer()
+        for i, values in enumerate(self._inputs):
+            self._buffer.set_arg(i, memoryview(values))
+        self._buffer.set_res(0, memoryview(self._values))
+
+    def __call__(self, *args) -> np.ndarray:
+        for target, value in zip(self._inputs, args, strict=True):
+            target[:] = value
+        self._trigger()
+        out = np.zeros(self._size)
+        out[self._rows] = self._values
+        return out
+
+
 @dataclass(frozen=True)
 class SymbolicNLP:
     """The NLP a transcription states, in CasADi: the decision vector ``z``, the objective (the linear cost plus the
