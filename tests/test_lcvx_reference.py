@@ -1,8 +1,9 @@
-"""The hand-condensed ``lcvx`` SOCP against its plain cvxpy statement (``rendezvous/lcvx_reference.py``).
+"""The ``lcvx`` SOCP as stated on ``convexguid.ocp`` against its plain cvxpy statement
+(``rendezvous/lcvx_reference.py``).
 
-Same problem, two independent writings: states eliminated and rows scaled by hand, or states kept as
-cvxpy variables. On the paper case (Wang & Tang 2003) they must give the same burn time and the same burn
-arcs; with too little thrust both must say infeasible.
+Same problem, two independent writings: a closed-form flow transcribed by ``convexguid.ocp`` and solved by the SCP
+engine, or the exact zero-order-hold pair from a matrix exponential in cvxpy. On the paper case (Wang & Tang 2003)
+they must give the same burn time and the same burn arcs; with too little thrust both must say infeasible.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ def paper():
 
 def test_same_burn_time(paper):
     _, _, plan, ref = paper
-    print(f"hand-condensed {plan.objective:.12g} s, cvxpy {ref.burn_time_s:.12g} s")
+    print(f"ocp statement {plan.objective:.12g} s, cvxpy {ref.burn_time_s:.12g} s")
     assert plan.status == "converged"
     assert ref.optimal, ref.status
     assert ref.burn_time_s == pytest.approx(plan.objective, rel=1e-6)

@@ -13,7 +13,7 @@ from scipy.linalg import expm
 
 from convexguid.api import solve
 from convexguid.cli import main
-from convexguid.dynamics.clohessy_wiltshire import cw_matrices, cw_stm, cw_stm_casadi, cw_zoh
+from convexguid.dynamics.clohessy_wiltshire import cw_hold_input_casadi, cw_matrices, cw_stm, cw_stm_casadi, cw_zoh
 from convexguid.errors import SpecError
 from convexguid.families.rendezvous.arc_phases import PhasedArcsProgram
 from convexguid.families.rendezvous.case import build_case
@@ -32,6 +32,15 @@ N = 0.0011313
 def test_stm_matches_matrix_exponential(dim, dt):
     A, _ = cw_matrices(N, 0.5, dim)
     assert np.allclose(cw_stm(N, dt, dim), expm(A * dt), rtol=1e-12, atol=1e-12 * max(1.0, dt))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("dt", [0.5, 8.0, 600.0, 5400.0])
+def test_closed_form_hold_input_is_the_matrix_exponential_one(dim, dt):
+    """The lcvx flow's input matrix in closed form against Van Loan's matrix exponential (cw_zoh)."""
+    closed = np.array(ca.evalf(cw_hold_input_casadi(N, 0.5, dt, dim)))
+    exponential = cw_zoh(N, 0.5, dt, dim)[1]
+    assert np.abs(closed - exponential).max() <= 1e-11 * np.abs(exponential).max()
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -226,3 +235,18 @@ def test_too_few_burns_are_named_against_the_lcvx_optimum():
     assert sol.summary()["lcvx_gap_rel"] > 1e-3
     assert "above the lcvx optimum on 600 steps" in sol.message
     assert "1 burns where the lcvx optimum has 2" in sol.message
+
+
+@pytest.mark.parametrize("problem", [PAPER, SPACE])
+def test_a_grid_too_fine_for_lcvx_is_refused_by_the_family_naming_its_key(problem):
+    """The family's estimate of the ``lcvx`` grid bounds ``convexguid.ocp``'s own of the problem it states, so the
+    refusal names the YAML key, not the transcription's."""
+    from convexguid.families import FAMILIES
+    from convexguid.families.rendezvous.lcvx import lcvx_problem
+    from convexguid.ocp.size import estimate_size
+
+    spec = load_problem(problem, ["method=lcvx", "certify=false"])
+    family = FAMILIES["rendezvous"].estimate_size(spec).memory_bytes
+    assert family >= estimate_size(lcvx_problem(build_case(spec), spec.discretization.grid_steps)).memory_bytes
+    with pytest.raises(SpecError, match=r"discretization\.grid_steps: problem too large"):
+        solve(problem, ["method=lcvx", "discretization.grid_steps=50000"])

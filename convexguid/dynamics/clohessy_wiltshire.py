@@ -93,6 +93,28 @@ def cw_stm_casadi(mean_motion: float, dt, dim: int = 3):
     return ca.vertcat(*(ca.horzcat(*(ca.SX(rows[i][j]) for j in keep)) for i in keep))
 
 
+def cw_hold_input_casadi(mean_motion: float, accel: float, dt, dim: int = 3):
+    """:math:`\\Gamma(\\Delta t) = \\int_0^{\\Delta t} \\Phi(s) B\\,ds`, the input matrix of a zero-order hold over a
+    step ``dt`` (a CasADi expression), in closed form: the velocity columns of eq. (3) integrated term by term,
+    with :math:`\\theta = n\\Delta t`. The flow of a held thrust is then
+    :math:`X(\\Delta t) = \\Phi(\\Delta t) X_0 + \\Gamma(\\Delta t) u` (:meth:`convexguid.ocp.Problem.flow`)."""
+    import casadi as ca  # the symbolic statement needs it; the numpy functions here do not
+
+    _check_dim(dim)
+    n, t = mean_motion, dt
+    s, versine = ca.sin(n * t), 2 * ca.sin(n * t / 2) ** 2  # 1 - cos, without its cancellation for short steps
+    rows = [
+        [4 * versine / n**2 - 1.5 * t**2, 2 * (t - s / n) / n, 0],
+        [2 * (s / n - t) / n, versine / n**2, 0],
+        [0, 0, versine / n**2],
+        [4 * s / n - 3 * t, 2 * versine / n, 0],
+        [-2 * versine / n, s / n, 0],
+        [0, 0, s / n],
+    ]
+    keep, columns = (range(6), range(3)) if dim == 3 else (IN_PLANE, range(2))
+    return accel * ca.vertcat(*(ca.horzcat(*(ca.SX(rows[i][j]) for j in columns)) for i in keep))
+
+
 def cw_zoh(mean_motion: float, accel: float, dt: float, dim: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """Exact zero-order-hold discretization :math:`X_{k+1} = \\Phi X_k + \\Gamma u_k` over a step ``dt``.
 

@@ -476,7 +476,9 @@ class SCPAlgorithm:
         if p1.status == "infeasible":
             state.x, state.raw, state.ev = p1.x, p1.raw, p1.ev
             state.objective = self._objective(state.ev, state.x)
-            state.finish("infeasible", "certificate: " + p1.message + " (locally: no nearby point is feasible)")
+            where = ("the program is convex: no point is feasible" if getattr(self.program, "affine", False)
+                     else "locally: no nearby point is feasible")
+            state.finish("infeasible", f"certificate: {p1.message} ({where})")
             return
         state.finish(p1.status, "phase-1 (least violation) ended " + p1.status + ": " + p1.message)
 

@@ -7,7 +7,7 @@ In one run, each method solves the problem ``repeat`` times and the fastest run 
   convex solve whose optimum is global for that grid;
 - ``lcvx (cvxpy statement)``: the same SOCP stated uncondensed in cvxpy
   (:func:`convexguid.families.rendezvous.lcvx_reference.solve_lcvx_cvxpy`), solved by cvxpy's Clarabel
-  interface: an independent cross-check of the hand-condensed program; its ``setup s`` is cvxpy's compile time;
+  interface: an independent cross-check of the ocp statement; its ``setup s`` is cvxpy's compile time;
 - ``scp_arcs``: Wang & Tang's burn/coast NLP (:class:`~convexguid.families.rendezvous.arc_phases.PhasedArcsProgram`)
   by the SCP engine (:func:`convexguid.scp.engine.solve_scp`) with the problem's solver settings,
   from the paper's kind of guess (:meth:`~convexguid.families.rendezvous.arc_layout.ArcsPlan.paper_guess`);
@@ -107,7 +107,7 @@ def _failed(method: str):
 
 
 def _lcvx_row(case: Rendezvous, steps: int, backend: str, repeat: int) -> RendezvousBenchRow:
-    """``lcvx`` on ``steps`` grid steps; wall = building the SOCP (ZOH, condensing) + solving + reading it."""
+    """``lcvx`` on ``steps`` grid steps; wall = stating and transcribing the problem + solving + reading it."""
     def run() -> tuple[RendezvousPlan, float]:
         start = time.perf_counter()
         plan = solve_lcvx(case, steps, backend)
@@ -240,10 +240,10 @@ def rendezvous_bench_markdown(rows: Sequence[RendezvousBenchRow], problem_path: 
     steps = "the problem's `grid_steps`" if grid_steps is None else f"{grid_steps} steps"
     caption = (
         f"Best of {repeat} runs per method, times in seconds. `lcvx`: one SOCP on {steps} (zero-order hold); "
-        "`wall s` includes building it, `solver s` is the convex solver alone, `iterations` its interior-point "
-        f"iterations. `{LCVX_CVXPY}`: the same SOCP stated in cvxpy with the states kept (a cross-check of the "
-        "hand-condensed one), solved by cvxpy's Clarabel interface at the same tolerance; `wall s` is the whole "
-        "call, `solver s` Clarabel's solve time, `setup s` cvxpy's compile time. "
+        "stated on convexguid.ocp; `wall s` includes stating and transcribing it, `solver s` is the convex solver "
+        f"alone, `iterations` SCP iterations (one: every map is affine). `{LCVX_CVXPY}`: the same SOCP stated in "
+        "cvxpy (a cross-check of the convexguid.ocp statement), solved by cvxpy's Clarabel interface at the same "
+        "tolerance; `wall s` is the whole call, `solver s` Clarabel's solve time, `setup s` cvxpy's compile time. "
         "`scp_arcs`: Wang & Tang's burn/coast NLP by SCP; `wall s` = `convexify s` (maps and "
         "Jacobians) + `solver s` (convex subproblems) + bookkeeping, `iterations` are SCP iterations. `ipopt`: "
         f"the same NLP in CasADi, IPOPT with exact Hessian (MUMPS, tol = {IPOPT_TOLERANCE:g}) from the same "

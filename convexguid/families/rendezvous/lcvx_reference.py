@@ -1,9 +1,8 @@
-"""The ``lcvx`` SOCP stated plainly in cvxpy: an independent reference for the hand-condensed one.
+"""The ``lcvx`` SOCP stated plainly in cvxpy: an independent reference for the project's own statement.
 
-:mod:`convexguid.families.rendezvous.lcvx` writes the lossless-convexification SOCP straight into
-Clarabel's standard form, with the states eliminated (:math:`X_K` as a sum over the controls) and the
-rows scaled; that is fast, but index bookkeeping is easy to get wrong. Here cvxpy states the problem the
-way it reads in the paper, states kept as variables:
+:mod:`convexguid.families.rendezvous.lcvx` states the lossless-convexification SOCP on :mod:`convexguid.ocp` (the
+flow in closed form, the thrust slack as its 2-norm fuel) and the SCP engine solves it. Here cvxpy states the
+problem the way it reads in the paper, states kept as variables:
 
 .. math::
 
@@ -12,10 +11,8 @@ way it reads in the paper, states kept as variables:
     |u_k| \\le \\Gamma_k \\le 1,\\quad X_0 = X_{init},\\; X_K = X_f,
 
 with the same exact zero-order-hold pair (:func:`~convexguid.dynamics.clohessy_wiltshire.cw_zoh`) and
-solved by cvxpy's ``CLARABEL`` interface. The two must give the same burn time; the modelling layer
-costs compile time and a larger (uncondensed) program, which is why the project solves the condensed
-one and keeps this one as a cross-check (the ``lcvx (cvxpy statement)`` benchmark row and
-``tests/test_lcvx_reference.py``).
+solved by cvxpy's ``CLARABEL`` interface. The two must give the same burn time (the ``lcvx (cvxpy statement)``
+benchmark row and ``tests/test_lcvx_reference.py``).
 """
 
 from __future__ import annotations

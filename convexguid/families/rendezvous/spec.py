@@ -193,8 +193,10 @@ class RendezvousProblem(ProblemBase):
     reference: Reference | None = None
 
 
-BYTES_PER_GRID_STEP = 5_000
-"""Peak memory per zero-order-hold step of the ``lcvx`` SOCP (measured 4.9 kB at 20 000 and 100 000 steps)."""
+BYTES_PER_GRID_STEP = 80_000
+"""Peak memory per zero-order-hold step of the ``lcvx`` problem as transcribed by ``convexguid.ocp`` (measured 45 kB
+coplanar at 2400 steps, 61 kB in three dimensions at 10 000; at least what ``convexguid.ocp``'s own estimate of its
+flow gives, so the family's limit, naming ``discretization.grid_steps``, comes first)."""
 
 BYTES_PER_SUBINTERVAL = (36_000, 10)
 """Peak memory of ``scp_arcs`` as ``a S + b S^2`` for ``S`` burn sub-intervals in all (fitted at S = 800, 1600)."""
