@@ -211,7 +211,7 @@ def _notes(rows: Sequence[RendezvousBenchRow]) -> list[str]:
         lines.append(f"scp_arcs wall time {scp.wall_s:.4f} s vs target < {SCP_WALL_TARGET_S:g} s: {met}")
     if lcvx is not None and lcvx_cvxpy is not None and lcvx.ok and lcvx_cvxpy.ok:
         rel = abs(lcvx_cvxpy.burn_time_s - lcvx.burn_time_s) / lcvx.burn_time_s
-        lines.append(f"{LCVX_CVXPY} vs lcvx burn time (same SOCP, uncondensed vs condensed): relative "
+        lines.append(f"{LCVX_CVXPY} vs lcvx burn time (the same SOCP, stated in cvxpy and on convexguid.ocp): relative "
                      f"difference {rel:.2e}; cvxpy compile {lcvx_cvxpy.setup_s:.4f} s + solve "
                      f"{lcvx_cvxpy.solver_s:.4f} s vs lcvx solver {lcvx.solver_s:.4f} s")
     if scp is not None and ipopt is not None and scp.ok and ipopt.ok:
