@@ -73,9 +73,9 @@ def main() -> int:
                "answer to the untightened NLP; on a nonconvex problem either may find the better local optimum. "
                "Imports are loaded before the clocks start. One run each on this machine.")
     notes = ["The nonconvex powered descent (thrust in an annulus, mass as a state) is the problem the LCvx row "
-             "relaxes: compare its IPOPT final mass with exp(-objective) of the LCvx row. convexguid's SCP run on "
-             "the nonconvex statement is shown as it ends (it is there for IPOPT): the lossless convexification is "
-             "how an SCP should state that problem, and the LCvx row is what it gives.",
+             "relaxes: compare its IPOPT final mass with exp(-objective) of the LCvx row. The SCP solves the "
+             "nonconvex statement too (its thrust cones kept exact in the curved subproblem of the end game), but "
+             "the lossless convexification is how an SCP should state that problem: one convex program.",
              "IPOPT's starts are the examples' own (straight lines, control guesses); on Betts' slew it stops at an "
              "acceptable level far above the published 28.6304 s from there, where the SCP reaches it."]
     text = bench_document("convexguid.ocp examples against IPOPT on the same NLP", ["numpy", "scipy", "casadi",

@@ -118,13 +118,7 @@ class SubproblemAssembler:
         pat.add_diagonal(row, so0, n_o)
         row += n_o
         row = add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
-        # second-order cones: v + F d with the cone's slack on its first row
-        for block in first.cones:
-            pat.add_sparse(row, 0, block.jacobian)
-            row += block.values.size
-        firsts = np.concatenate([[0], np.cumsum(cone_sizes)[:-1]]).astype(int) if cone_sizes else np.zeros(0, int)
-        self._cone_first_rows = firsts
-        pat.add_entries(row - n_cone_rows + firsts, t0 + self.n_eq + np.arange(self.n_cones))
+        add_cone_rows(pat, row, first.cones, cone_sizes, t0 + self.n_eq)
         pat.finish()
         self._a_pattern = pat
         self._m_data = sp.coo_matrix(outputs.M).data
@@ -240,6 +234,16 @@ def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts
     pat.add_diagonal(row, 0, n)
     pat.add_diagonal(row + n, 0, n)
     return row + 2 * n
+
+
+def add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...], slack0: int) -> None:
+    """The second-order cones' rows from ``row`` on, shared by the lifted and the condensed subproblem: each cone's
+    map :math:`v + F d`, its slack (columns from ``slack0``, one a cone) on its first row."""
+    for block in cones:
+        pat.add_sparse(row, 0, block.jacobian)
+        row += block.values.size
+    firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int) if sizes else np.zeros(0, int)
+    pat.add_entries(row - sum(sizes) + firsts, slack0 + np.arange(len(sizes)))
 
 
 def _add_jacobian(pat: _Pattern, row0: int, jacobian: np.ndarray | sp.spmatrix | None, rows: int, n: int) -> None:

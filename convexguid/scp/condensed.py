@@ -39,7 +39,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram
-from convexguid.scp.assembly import DualLayout, _add_jacobian, _jacobian_data, _Pattern, _values, add_softened_rows
+from convexguid.scp.assembly import (
+    DualLayout,
+    _add_jacobian,
+    _jacobian_data,
+    _Pattern,
+    _values,
+    add_cone_rows,
+    add_softened_rows,
+)
 from convexguid.scp.lagrangian import Multipliers
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
 
@@ -66,8 +74,6 @@ class CondensedAssembler:
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
                  curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
-        if first.cones:
-            raise ValueError("the condensed subproblem has no second-order cones; use the lifted one")
         self.n, self.m = n, first.residuals.size
         linear = linear.sparse()
         self.linear, self.outputs, self.scale = linear, outputs, scale
@@ -75,11 +81,14 @@ class CondensedAssembler:
         self.n_ineq = sum(b.values.size for b in first.inequalities)
         self.n_eq = sum(b.values.size for b in first.equalities)
         n_a, n_g, n_o = linear.A.shape[0], linear.G.shape[0], outputs.M.shape[0]
-        self.n_slack = n_o + self.n_ineq + self.n_eq
+        cone_sizes = tuple(size for block in first.cones for size in block.sizes)
+        self.n_cones, n_cone_rows = len(cone_sizes), sum(cone_sizes)
+        self.n_slack = n_o + self.n_ineq + self.n_eq + self.n_cones
         self.num_z = n + self.n_slack
         so0, sg0, t0 = n, n + n_o, n + n_o + self.n_ineq
-        self.cones = Cones(zero=n_a, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n)
-        self.layout = DualLayout(n_a, 0, n_g, n_o, self.n_ineq, self.n_eq)
+        self.cones = Cones(zero=n_a, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n,
+                           soc=cone_sizes)
+        self.layout = DualLayout(n_a, 0, n_g, n_o, self.n_ineq, self.n_eq, n_cone_rows)
         pat = _Pattern((self.cones.rows, self.num_z))
         _add_jacobian(pat, 0, linear.A, n_a, n)
         row = n_a
@@ -88,7 +97,8 @@ class CondensedAssembler:
         pat.add_dense(row, 0, n_o, n)
         pat.add_diagonal(row, so0, n_o)
         row += n_o
-        add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
+        row = add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
+        add_cone_rows(pat, row, first.cones, cone_sizes, t0 + self.n_eq)
         pat.finish()
         self._a_pattern = pat
         self._M = sp.csr_matrix(outputs.M)
@@ -121,14 +131,15 @@ class CondensedAssembler:
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
         a_blocks = [_jacobian_data(lin.A), _jacobian_data(lin.G), self._M @ J, -np.ones(n_o),
                     *jac_g, -np.ones(self.n_ineq), *jac_e, -np.ones(self.n_eq), *[-j for j in jac_e],
-                    -np.ones(self.n_eq), -np.ones(self.n_slack), 1.0 / scale, -1.0 / scale]
+                    -np.ones(self.n_eq), -np.ones(self.n_slack), 1.0 / scale, -1.0 / scale,
+                    *(-_jacobian_data(block.jacobian) for block in ev.cones), -np.ones(self.n_cones)]
         A = self._a_pattern.matrix(a_blocks)
         A.data *= self._a_data_scale
         room = lin.h - lin.G @ x
         # a hard inequality the iterate meets only to the backend's tolerance must not make d = 0 infeasible
         room[(room < 0) & (room > -1e-7 * (1 + np.abs(lin.h)))] = 0.0
         b = np.concatenate([lin.b - lin.A @ x, room, self.outputs.m - self._M @ r, -g, -e, e,
-                            np.zeros(self.n_slack), np.full(2 * n, radius)])
+                            np.zeros(self.n_slack), np.full(2 * n, radius), _values(ev.cones)])
         J_u = J * scale
         WJ = self.weights[:, None] * J_u
         hess = 2.0 * (J_u.T @ WJ)

@@ -149,8 +149,8 @@ class CurvedSubproblem:
 
     @staticmethod
     def applies(algo: SCPAlgorithm, first: Evaluation) -> bool:
-        """The program has an end game (a Hessian to use) and no second-order cones (the condensed QP has none)."""
-        return algo.second_order is not None and not first.cones
+        """The program has an end game (a Hessian to use)."""
+        return algo.second_order is not None
 
     def hessian(self, state: IterationState) -> CurvedModel | None:
         """:math:`\\bar H` at the iterate and the rows it is augmented with (None before any multipliers)."""

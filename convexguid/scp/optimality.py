@@ -118,8 +118,9 @@ NEAR_ACTIVE = 1e-6
 
 def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Multipliers | None:
     """The multipliers that best satisfy stationarity at the iterate: nonnegative on the inequalities within
-    :data:`NEAR_ACTIVE` of their bounds, free on the equalities, zero elsewhere (None with cones: their duals are not
-    estimated).
+    :data:`NEAR_ACTIVE` of their bounds, free on the equalities, zero elsewhere; a second-order cone within
+    :data:`NEAR_ACTIVE` of its boundary (not at its apex) is the inequality :math:`\\|v_{1:}\\| - v_0 \\le 0` there,
+    whose multiplier :math:`\\mu` is the cone dual :math:`\\mu (1, -v_{1:}/\\|v_{1:}\\|)` (:func:`_cone_rows`).
 
     The KKT conditions ask that *some* multipliers exist. Where the active constraints are degenerate (a rate box
     held over several nodes, whose rows the defects nearly imply) the multipliers are not unique, and those of the
@@ -129,8 +130,6 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     problem, SciPy's BVLS), is the best those constraints can do.
     """
     raw = state.raw
-    if raw.cones:
-        return None
     linear = algo.program.linear_constraints() if algo.second_order is None else algo.second_order.linear
     outputs = algo.outputs
     gap = linear.G @ state.x - linear.h if linear.G.shape[0] else np.zeros(0)
@@ -139,16 +138,44 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     size = sum(b.values.size for b in raw.equalities)
     working = WorkingSet(gap >= -NEAR_ACTIVE, out >= -NEAR_ACTIVE, values >= -NEAR_ACTIVE, np.ones(size, dtype=bool))
     rows = working.rows(raw, linear, outputs)
-    if rows.shape[0] == 0:
+    cone_rows, cone_duals = _cone_rows(raw, state.x.size)
+    if rows.shape[0] + cone_rows.shape[0] == 0:
         return None
     free = linear.A.shape[0]
     signed = rows.shape[0] - free - size
-    lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(size, -np.inf)])
-    matrix = (rows @ sp.diags(algo.scale)).T.toarray()
+    lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(size, -np.inf),
+                            np.zeros(cone_rows.shape[0])])
+    matrix = (sp.vstack([rows, cone_rows]) @ sp.diags(algo.scale)).T.toarray()
     target = -objective_gradient(raw, algo.weights, algo.cost) * algo.scale
     fit = lsq_linear(matrix, target, bounds=(lower, np.full(lower.size, np.inf)), method="bvls")
     shape = Multipliers(np.zeros(size), np.zeros(values.size), np.zeros(out.size), np.zeros(free), np.zeros(gap.size))
-    return working.multipliers(fit.x, shape)
+    estimate = working.multipliers(fit.x[: rows.shape[0]], shape)
+    return replace(estimate, cone=cone_duals @ fit.x[rows.shape[0]:]) if raw.cones else estimate
+
+
+def _cone_rows(raw, n: int) -> tuple[sp.csr_matrix, np.ndarray]:
+    """The gradient of :math:`\\|v_{1:}\\| - v_0` for each cone within :data:`NEAR_ACTIVE` of its boundary (one row
+    each), and the map from their multipliers to the cone rows' duals, :math:`\\mu (1, -v_{1:}/\\|v_{1:}\\|)`."""
+    total = sum(block.values.size for block in raw.cones)
+    gradients, columns, start = [], [], 0
+    for block in raw.cones:
+        jacobian = sp.csr_matrix(block.jacobian)
+        first = 0
+        for size in block.sizes:
+            v = block.values[first: first + size]
+            norm = float(np.linalg.norm(v[1:]))
+            if norm > 0 and norm - v[0] >= -NEAR_ACTIVE:
+                direction = v[1:] / norm
+                gradients.append(sp.csr_matrix(direction @ jacobian[first + 1: first + size] - jacobian[first]))
+                dual = np.zeros(total)
+                dual[start + first] = 1.0
+                dual[start + first + 1: start + first + size] = -direction
+                columns.append(dual)
+            first += size
+        start += block.values.size
+    if not gradients:
+        return sp.csr_matrix((0, n)), np.zeros((total, 0))
+    return sp.vstack(gradients).tocsr(), np.column_stack(columns)
 
 
 def certified_by_least_squares(algo: SCPAlgorithm, state: IterationState) -> bool:
