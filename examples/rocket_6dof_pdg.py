@@ -23,8 +23,9 @@ with T_min = 1.5. The quaternion's unit norm is no constraint, in OpenSCvx or he
 |q|, and the final q is a unit quaternion (the initial one is free), so |q| = 1 to the transcription's error
 (IPOPT's optimum: within 7e-5 on 20 Hermite-Simpson intervals, 2e-8 on 20 zero-order-hold intervals); R(q) is
 the quadratic form the file writes (|q|^2 times a rotation). No published optimum: the reference is IPOPT on the
-same transcription (convexguid.ocp.reference.solve_with_ipopt). Today the SCP does not converge here: on the
-default grid it ends max_iterations at 1.60264 (IPOPT 1.603065), the crawl docs/ocp.md describes under known limits.
+same transcription (convexguid.ocp.reference.solve_with_ipopt). Today the SCP reaches IPOPT's final mass on the
+default grid (1.603065) but ends unverified after 134 iterations, its KKT stationarity at 9e-6 (docs/ocp.md, known
+limits).
 Run: python examples/rocket_6dof_pdg.py
 """
 
