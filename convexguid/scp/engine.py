@@ -72,15 +72,12 @@ from convexguid.scp.newton import Candidate, newton_candidate
 from convexguid.scp.optimality import certified_by_least_squares, certified_here, finish_optimal, kkt_met, measure_kkt
 from convexguid.scp.policies import BackendRetry, FunnelPolicy, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import CurvatureModel, Evaluation, NonconvexProgram, SCPSettings
-from convexguid.scp.restoration import ElasticPhase1, restore_start
+from convexguid.scp.restoration import restore_start, run_phase1
 from convexguid.scp.state import IterationRecord, IterationState, SCPResult, merge_results
 
 __all__ = ["IterationRecord", "SCPAlgorithm", "SCPResult", "merge_results", "solve_scp"]
 
 Log = Callable[[IterationRecord], None]
-
-MAX_PHASE1_RUNS = 3
-"""Phase-1 restorations one run may make before a stall with constraints violated ends it."""
 
 NEARLY_FEASIBLE = 100.0
 """A first stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once.
@@ -376,6 +373,7 @@ class SCPAlgorithm:
         state.merit = self._merit(state.ev, x, penalty)
 
     merit = _merit
+    objective = _objective
     ratio = staticmethod(decrease_ratio)
     violation = staticmethod(max_violation)
 
@@ -445,42 +443,7 @@ class SCPAlgorithm:
             state.radius = self.trust_region.after_penalty_change(state.radius)
             return
         # at the largest penalty, or stalled by round-off just above the tolerance: restore feasibility directly
-        self._phase1(state)
-
-    def _phase1(self, state: IterationState) -> None:
-        """At the largest penalty and still infeasible: minimise the violation alone from here.
-
-        A feasible point found this way restarts the main loop from it; a phase-1 stall with the
-        violation positive is the certificate of (local) infeasibility.
-        """
-        if state.phase1_runs >= MAX_PHASE1_RUNS:
-            state.finish("max_iterations", "iterates stalled with constraints violated after a phase-1 restart: "
-                         + describe_violations(state.ev))
-            return
-        state.phase1_runs += 1
-        settings = replace(self.settings, penalty=1.0, penalty_max=1.0, penalty_unit="absolute")
-        phase1 = SCPAlgorithm(ElasticPhase1(self.program), settings, self.log, phase1=True)
-        p1 = phase1.initialize(state.x)
-        while not p1.finished:
-            phase1.step(p1)
-        state.iteration += p1.iteration
-        state.history.extend(replace(r, iteration=state.iteration - p1.iteration + r.iteration) for r in p1.history)
-        state.solver_time_s += p1.solver_time_s
-        state.convexify_time_s += p1.convexify_time_s
-        if p1.status == "converged":
-            state.x, state.raw, state.ev, state.kkt = p1.x, p1.raw, p1.ev, None
-            state.objective = self._objective(state.ev, state.x)
-            state.merit = self._merit(state.ev, state.x, state.penalty)
-            state.radius = self.trust_region.initial
-            return
-        if p1.status == "infeasible":
-            state.x, state.raw, state.ev = p1.x, p1.raw, p1.ev
-            state.objective = self._objective(state.ev, state.x)
-            where = ("the program is convex: no point is feasible" if getattr(self.program, "affine", False)
-                     else "locally: no nearby point is feasible")
-            state.finish("infeasible", f"certificate: {p1.message} ({where})")
-            return
-        state.finish(p1.status, "phase-1 (least violation) ended " + p1.status + ": " + p1.message)
+        run_phase1(self, state)
 
     def _check_limit(self, state: IterationState) -> IterationState:
         if not state.finished and state.iteration >= self.settings.max_iterations:

@@ -15,13 +15,22 @@ and 18.5 on elastic modes).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram, make_backend
+from convexguid.scp.merit import describe_violations
 from convexguid.scp.problem import LinearConstraints, NonconvexProgram
+
+if TYPE_CHECKING:
+    from convexguid.scp.engine import SCPAlgorithm
+    from convexguid.scp.state import IterationState
+
+MAX_PHASE1_RUNS = 3
+"""Phase-1 restorations one run may make before a stall with constraints violated ends it."""
 
 CERTIFYING_BACKEND = "clarabel"
 """Interior-point solver used for the projection and the elastic program (accurate, reports infeasibility)."""
@@ -117,3 +126,39 @@ class ElasticPhase1:
 
     def __getattr__(self, name: str):
         return getattr(self._program, name)
+
+
+def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
+    """At the largest penalty and still infeasible: minimise the violation alone from ``state`` (an
+    :class:`ElasticPhase1` run of the same engine).
+
+    A feasible point found this way restarts the main loop from it; a phase-1 stall with the violation positive is
+    the certificate of infeasibility: local, or global when every map of the program is affine (a convex program).
+    """
+    if state.phase1_runs >= MAX_PHASE1_RUNS:
+        state.finish("max_iterations", "iterates stalled with constraints violated after a phase-1 restart: "
+                     + describe_violations(state.ev))
+        return
+    state.phase1_runs += 1
+    settings = replace(algo.settings, penalty=1.0, penalty_max=1.0, penalty_unit="absolute")
+    phase1 = type(algo)(ElasticPhase1(algo.program), settings, algo.log, phase1=True)
+    p1 = phase1.initialize(state.x)
+    while not p1.finished:
+        phase1.step(p1)
+    state.iteration += p1.iteration
+    state.history.extend(replace(r, iteration=state.iteration - p1.iteration + r.iteration) for r in p1.history)
+    state.solver_time_s += p1.solver_time_s
+    state.convexify_time_s += p1.convexify_time_s
+    if p1.status not in ("converged", "infeasible"):
+        state.finish(p1.status, "phase-1 (least violation) ended " + p1.status + ": " + p1.message)
+        return
+    # the elastic program evaluates the program itself: its point's evaluation is the main loop's
+    state.x, state.raw, state.ev = p1.x, p1.raw, p1.ev
+    state.objective = algo.objective(state.ev, state.x)
+    if p1.status == "converged":
+        state.kkt, state.merit = None, algo.merit(state.ev, state.x, state.penalty)
+        state.radius = algo.trust_region.initial
+    else:
+        where = ("the program is convex: no point is feasible" if getattr(algo.program, "affine", False)
+                 else "locally: no nearby point is feasible")
+        state.finish("infeasible", f"certificate: {p1.message} ({where})")
