@@ -252,18 +252,18 @@ def tightened(slew: Slew, case: AttitudeCase, margin: float) -> Slew:
     base, program = slew.case, slew.program
     if slew.margin:
         raise ValueError("tighten the untightened slew: margins replace, they do not add up")
-    per_constraint = []
+    by_name = {}  # each path constraint's margin, by the name attitude_problem gives it
     for cone in base.cones:
-        if cone.keep_out:
-            per_constraint.append(np.cos(cone.half_angle_rad) - np.cos(min(np.pi, cone.half_angle_rad + margin)))
-        else:
-            per_constraint.append(np.cos(max(0.0, cone.half_angle_rad - margin)) - np.cos(cone.half_angle_rad))
+        by_name[f"{cone.kind}_{cone.name}"] = (
+            np.cos(cone.half_angle_rad) - np.cos(min(np.pi, cone.half_angle_rad + margin)) if cone.keep_out
+            else np.cos(max(0.0, cone.half_angle_rad - margin)) - np.cos(cone.half_angle_rad))
     for fb in base.forbidden:
-        per_constraint += 2 * [np.cos(fb.min_angle / 2) - np.cos(min(np.pi, fb.min_angle + margin) / 2)]
+        by_name[f"forbidden_{fb.name}"] = by_name[f"forbidden_{fb.name}_opposite"] = (
+            np.cos(fb.min_angle / 2) - np.cos(min(np.pi, fb.min_angle + margin) / 2))
     rate_cut = 0.0 if base.rate_max is None else base.rate_max - case.rate_max
-    if base.rate_max is not None:
-        per_constraint += 6 * [rate_cut / base.rate_max]
-    per_constraint = np.asarray(per_constraint, dtype=float)
+    by_name |= {f"rate_{i + 1}_{side}": rate_cut / base.rate_max for i in range(3) for side in ("max", "min")
+                if base.rate_max is not None}
+    per_constraint = np.array([by_name[c.name] for c in program.problem.constraints], dtype=float)
     bounds = np.zeros((program.N + 1, NX))
     bounds[:, 4:7] = rate_cut
     margins = Margins(per_constraint[[j for _, _, j in program.path_rows]], bounds.ravel())
