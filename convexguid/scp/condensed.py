@@ -4,18 +4,19 @@
 Jacobian :math:`J` appears once in a large sparse KKT system. When :math:`n` is small and the
 Jacobians are dense, the opposite is cheaper: substitute :math:`y` and solve a small dense QP in
 the step alone. With the scaled step :math:`u = S^{-1} d` (:math:`S = \\operatorname{diag}\\sigma`)
-the variables are ``z = [u, s_o, s_g, t]`` and
+the variables are ``z = [u, s_o, s_g, t, s_c]`` and
 
 .. math::
 
     \\min\\; u^T S (J^T W J + \\tfrac12 H) S u + (2 J^T W r + c)^T S u + r^T W r
-    + \\rho\\,(1^T s_o + 1^T s_g + 1^T t)
+    + \\rho\\,(1^T s_o + 1^T s_g + 1^T t + 1^T s_c)
 
     \\text{s.t.}\\quad A S u = b - A x,\\quad G S u \\le h - G x,\\quad
     M J S u - s_o \\le m - M r,
 
     g + \\nabla g\\, S u \\le s_g,\\quad |e + \\nabla e\\, S u| \\le t,\\quad
-    s_o, s_g, t \\ge 0,\\quad |u_i| \\le \\Delta,
+    \\|v_{1:} + F_{1:} S u\\| \\le v_0 + F_0 S u + s_c,\\quad
+    s_o, s_g, t, s_c \\ge 0,\\quad |u_i| \\le \\Delta,
 
 which is the lifted subproblem with :math:`y` substituted: the same optimal step and value (the
 constant :math:`r^T W r` rides along in :attr:`ConicProgram.constant`, so
@@ -67,8 +68,10 @@ class CondensedAssembler:
 
     Row layout of ``A z + s = b``: zero cone ``A S u = b - A x``; nonnegative cone, in order,
     ``G``, outputs, linearized inequalities, ``+eq``, ``-eq``, ``-slacks <= 0``, ``u <= radius``,
-    ``-u <= radius`` (the lifted form's, less its ``J d - y = -r`` rows). ``P`` is dense on ``u``
-    and zero on the slacks; the output rows ``M J`` are dense.
+    ``-u <= radius``; then each second-order cone ``v + F S u`` with its slack on its first row (the lifted form's,
+    less its ``J d - y = -r`` rows). ``P`` is dense on ``u`` and zero on the slacks; the output rows ``M J`` are
+    dense. A program with cones goes to a conic backend (the curved subproblem's Clarabel); the dense one takes
+    none.
     """
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
