@@ -119,6 +119,7 @@ class SCPAlgorithm:
         self.funnel = FunnelPolicy()
         self.weights, self.cost = program.residual_weights(), program.linear_cost()
         self.outputs = program.output_constraints()
+        self.linear = program.linear_constraints()  # fixed for the run: read once
         self.scale = program.variable_scale()
         model = getattr(program, "curvature_model", None)
         self.curvature: CurvatureModel | None = model() if model is not None else None  # None: affine constraints
@@ -176,7 +177,7 @@ class SCPAlgorithm:
             # the assembly and the backend, decided once from the first evaluation (backend: auto)
             self.choice = choose_subproblem(self.settings.backend, self.program.num_variables, raw, self.weights)
             assembler = CondensedAssembler if self.choice.condensed else SubproblemAssembler
-            self.assembler = assembler(self.program.num_variables, raw, self.program.linear_constraints(),
+            self.assembler = assembler(self.program.num_variables, raw, self.linear,
                                        self.outputs, self.scale, self.cost, self.weights,
                                        curvature=None if self.curvature is None
                                        else (self.curvature.rows, self.curvature.cols))

@@ -34,7 +34,7 @@ def measure_kkt(algo: SCPAlgorithm, state: IterationState) -> None:
     if state.multipliers is None or algo.phase1:
         return
     state.kkt = kkt_residuals(state.x, state.raw, state.multipliers, weights=algo.weights, cost=algo.cost,
-                              linear=algo.program.linear_constraints(), outputs=algo.outputs, scale=algo.scale,
+                              linear=algo.linear, outputs=algo.outputs, scale=algo.scale,
                               objective=state.objective, objective_at_start=algo.objective_at_start,
                               feasibility=algo.violation(state.ev))
 
@@ -130,7 +130,7 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     problem, SciPy's BVLS), is the best those constraints can do.
     """
     raw = state.raw
-    linear = algo.program.linear_constraints() if algo.second_order is None else algo.second_order.linear
+    linear = algo.linear
     outputs = algo.outputs
     gap = linear.G @ state.x - linear.h if linear.G.shape[0] else np.zeros(0)
     out = outputs.M @ raw.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
