@@ -214,19 +214,21 @@ def _planar_transfer(name: str, start: float, duration: float, intervals: int, e
 def test_a_maneuver_cut_in_two_phases_is_the_same_program_as_in_one():
     """The same least-fuel transfer (thrust cone, keep-out disc, zero-order hold) over 4 s on 16 intervals, stated
     whole and as two phases of 2 s and 8 intervals joined by continuity: the same transcribed program, so the same
-    fuel (to 1e-7), after the same repair (the keep-out disc, broken between nodes, tightened at the nodes where
-    it broke). IPOPT on the two-phase program as stated, untightened, is lower by that tightening's price only."""
+    fuel (to 1e-7) after the same repair rounds. IPOPT on the two-phase program as stated is within 1e-3 below."""
     start = {("initial", k): v for k, v in zip(("x", "y", "vx", "vy"), (0.0, 0.0, 0.0, 0.0), strict=True)}
     stop = {("final", k): v for k, v in zip(("x", "y", "vx", "vy"), (2.0, 0.0, 0.0, 0.0), strict=True)}
     whole = _planar_transfer("whole", 0.0, 4.0, 16, {**start, **stop}).solve()
     assert whole.status == "converged", whole.message
+    # its thrust cone holds with equality: the end game's working set, which knows no cones, proves no saddle
+    # (before, the run stepped off two false ones and ended 2.2e-4 higher after a repair)
+    assert "saddle" not in whole.message
     first, second = _planar_transfer("first", 0.0, 2.0, 8, start), _planar_transfer("second", 2.0, 2.0, 8, stop)
     halves = Phases("halves", [first, second])
     halves.connect(first, second)
     split = halves.solve()
     assert split.status == "converged", split.message
     assert split.objective == pytest.approx(whole.objective, rel=1e-7)
-    assert [r.repair for r in split.repair_rounds][1:] and len(split.repair_rounds) == len(whole.repair_rounds)
+    assert len(split.repair_rounds) == len(whole.repair_rounds)
     answer = solve_with_ipopt(transcribe(halves))
     assert answer.success and answer.objective <= split.objective <= answer.objective * (1 + 1e-3)
     assert split.verification.passed and "first.keep_out" in {c.name for c in split.verification.checks}

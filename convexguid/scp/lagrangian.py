@@ -66,6 +66,11 @@ class Multipliers:
         return max(float(np.max(np.abs(np.concatenate([self.equality, self.inequality, self.output, self.cone])),
                                 initial=0.0)), 1e-12)
 
+    def cone_active(self) -> bool:
+        """Whether some second-order cone holds with equality (its dual above round-off): the working-set models of
+        the end game (:mod:`convexguid.scp.endgame`) know no cones, so their reduced space is then too large."""
+        return bool(self.cone.size) and float(np.max(np.abs(self.cone))) > 1e-9 * (1.0 + self.largest())
+
     def significant(self) -> float:
         """The size from which a multiplier counts (1e-6 of the largest of any constraint): an interior-point solver
         leaves tiny positive duals on inactive rows."""

@@ -65,10 +65,9 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
         return None
     if algo.violation(state.ev) > s.second_order_violation:
         return None
-    if state.multipliers.cone.size and float(np.max(np.abs(state.multipliers.cone))) > 1e-9 * (
-            1.0 + state.multipliers.largest()):
-        # a cone holds with equality: the equality-constrained step knows no cones (the first-order steps,
-        # which keep each cone exact, finish the run)
+    if state.multipliers.cone_active():
+        # a cone holds with equality: the equality-constrained step knows no cones (the curved and first-order
+        # steps, which keep each cone exact, finish the run)
         return None
     working = models.working_set(state.x, state.raw, state.multipliers, s.feasibility_tolerance, state.penalty)
     settled, state.working_set = working == state.working_set, working
