@@ -41,17 +41,14 @@ def estimate_size(problem: Problem) -> SizeEstimate:
     from convexguid.scp.lagrangian import MAX_DENSE_SIZE  # the engine loads at the first solve, not with ocp
 
     nx, nu, N = len(problem.states), len(problem.controls), problem.intervals
-    inputs = [problem.state_vector(), problem.control_vector(), problem.time]
-    if problem.method == "flow":  # one copy of the closed-form flow an interval
-        flow = ca.vertcat(*(problem.transitions.get(v.name, v.symbol) for v in problem.states))
-        instructions, copies, per_copy, of = ca.Function("flow", inputs, [flow]).n_instructions(), 1, \
-            BYTES_PER_FLOW_COPY, "flow's"
-    else:
-        instructions = ca.Function("rate", inputs, [problem.rate_vector()]).n_instructions()
-        copies = {"hermite-simpson": 3, "chebyshev": 1}.get(problem.method, 4 * problem.substeps)
-        per_copy, of = BYTES_PER_COPY, "dynamics'"
-    instructions += nx + nu
-    graph = per_copy * instructions * copies * (N + 1)
+    flow = problem.method == "flow"  # one copy of the closed-form flow an interval, no Runge-Kutta stages
+    copied = (ca.vertcat(*(problem.transitions.get(v.name, v.symbol) for v in problem.states)) if flow
+              else problem.rate_vector())
+    instructions = ca.Function("copied", [problem.state_vector(), problem.control_vector(), problem.time],
+                               [copied]).n_instructions() + nx + nu
+    copies = {"flow": 1, "hermite-simpson": 3, "chebyshev": 1}.get(problem.method, 4 * problem.substeps)
+    graph = (BYTES_PER_FLOW_COPY if flow else BYTES_PER_COPY) * instructions * copies * (N + 1)
+    of = "flow's" if flow else "dynamics'"
     if problem.method == "chebyshev":
         graph += BYTES_PER_SPECTRAL_TERM * (N + 1) ** 2 * nx
     variables = (N + 1) * (nx + 2 * nu) + 1

@@ -150,11 +150,6 @@ class CurvedSubproblem:
         return bool(state.polish) or (near and state.pinned >= CRAWL and not algo.phase1
                                       and algo.program.num_variables <= CURVED_SIZE)
 
-    @staticmethod
-    def applies(algo: SCPAlgorithm, first: Evaluation) -> bool:
-        """The program has an end game (a Hessian to use)."""
-        return algo.second_order is not None
-
     def hessian(self, state: IterationState) -> CurvedModel | None:
         """:math:`\\bar H` at the iterate and the rows it is augmented with (None before any multipliers)."""
         algo = self.algo

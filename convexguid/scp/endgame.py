@@ -32,7 +32,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 
 from convexguid.scp.lagrangian import CurvatureWeights, Multipliers, WorkingSet, objective_gradient
-from convexguid.scp.problem import Evaluation, NonconvexProgram, OutputConstraints
+from convexguid.scp.problem import Evaluation, LinearConstraints, NonconvexProgram, OutputConstraints
 
 RANK_TOLERANCE = 1e-6
 """Rows of the working set whose pivots fall below this share of the largest are taken as dependent."""
@@ -135,10 +135,10 @@ class LocalModel:
 class SecondOrderModels:
     """Builds :class:`LocalModel` s of one program: its Lagrangian Hessian, scales and constant data."""
 
-    def __init__(self, program: NonconvexProgram, first: Evaluation, scale: np.ndarray, weights: np.ndarray,
+    def __init__(self, program: NonconvexProgram, linear: LinearConstraints, scale: np.ndarray, weights: np.ndarray,
                  cost: np.ndarray, outputs: OutputConstraints) -> None:
         self.hessian = program.lagrangian_hessian
-        self.linear = program.linear_constraints()
+        self.linear = linear
         self.scale, self.weights, self.cost, self.outputs = scale, weights, cost, outputs
 
     def gauss_newton(self, raw: Evaluation) -> np.ndarray:

@@ -184,10 +184,9 @@ class SCPAlgorithm:
             n = self.program.num_variables
             if (self.settings.second_order and hasattr(self.program, "lagrangian_hessian")
                     and jacobian_structure(raw, n).nnz and n <= MAX_DENSE_SIZE):
-                self.second_order = SecondOrderModels(self.program, raw, self.scale, self.weights, self.cost,
-                                                      self.outputs)
-                if CurvedSubproblem.applies(self, raw):
-                    self.curved = CurvedSubproblem(self)
+                self.second_order = SecondOrderModels(self.program, self.linear, self.scale, self.weights,
+                                                      self.cost, self.outputs)
+                self.curved = CurvedSubproblem(self)
         return state
 
     @property

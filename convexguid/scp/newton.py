@@ -11,7 +11,7 @@ equality-constrained quadratic step on that subproblem's working set:
 * inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one,
   freed by a good whole one), and the first-order one;
 * judged by the merit function with the penalty weight at most the one that follows the multipliers
-  (:meth:`~convexguid.scp.policies.PenaltyPolicy.following`): any weight above the multipliers makes the
+  (:meth:`~convexguid.scp.policies.PenaltyPolicy.judging`): any weight above the multipliers makes the
   penalty exact, and a far larger one (an escalation that has served its purpose) only magnifies the
   curvature error of a long step (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 18.3). Not when
   every multiplier is inactive: they then say nothing of the weight needed, and a weight brought down to its
@@ -85,9 +85,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     whole = length <= radius
     if length > radius:
         newton = replace(newton, step=newton.step * (radius / length))
-    largest, policy = state.multipliers.largest(), algo.penalty
-    rho = state.penalty if largest < policy.inactive * state.penalty else min(
-        state.penalty, policy.following(largest, algo.objective_size))
+    rho = algo.penalty.judging(state.penalty, state.multipliers.largest(), algo.objective_size)
     merit = algo.merit(state.ev, state.x, rho)
     d = newton.step * algo.scale
     predicted = merit - (state.objective + model.quadratic(newton.step)

@@ -107,6 +107,14 @@ class PenaltyPolicy:
         target = self.following(largest_multiplier, objective_size)
         return target if rho > self.slack * target else None
 
+    def judging(self, rho: float, largest_multiplier: float, objective_size: float) -> float:
+        """The weight that judges Newton's step (:mod:`convexguid.scp.newton`): ``rho``, at most the one
+        :meth:`following` the multipliers, unless every multiplier is below :attr:`inactive` times ``rho`` (then they
+        say nothing of the weight needed)."""
+        if largest_multiplier < self.inactive * rho:
+            return rho
+        return min(rho, self.following(largest_multiplier, objective_size))
+
     def escalated(self, rho: float, objective_size: float) -> float | None:
         """The next weight, or ``None`` if ``rho`` is already at the maximum."""
         ceiling = self.maximum * self.scale(objective_size)

@@ -69,6 +69,17 @@ def state_scales(case: Rendezvous) -> np.ndarray:
     return np.concatenate([np.full(d, pos), np.full(d, vel)])
 
 
+def cw_states(p: Problem, case: Rendezvous, initial: np.ndarray | None = None,
+              final: np.ndarray | None = None) -> ca.SX:
+    """The relative position and velocity as states of ``p`` (their scales :func:`state_scales`), fixed to
+    ``initial`` and ``final`` where given; the column of them."""
+    d, scales = case.dim, state_scales(case)
+    labels = [*AXES[:d], *(f"v{axis}" for axis in AXES[:d])]
+    return ca.vertcat(*(p.state(label, initial=None if initial is None else float(initial[i]),
+                                final=None if final is None else float(final[i]), scale=float(scales[i]),
+                                unit="m" if i < d else "m/s") for i, label in enumerate(labels)))
+
+
 def arc_problem(case: Rendezvous, name: str, burn: bool, subintervals: int, initial: np.ndarray | None = None,
                 final: np.ndarray | None = None) -> Problem:
     """One arc as a :class:`~convexguid.ocp.Problem` (see the module docstring), its states fixed to ``initial``
@@ -76,11 +87,7 @@ def arc_problem(case: Rendezvous, name: str, burn: bool, subintervals: int, init
     duration, is only the duration's scale (every arc's, as in the paper's design vector): the start is assembled
     from a design vector (:meth:`PhasedArcsProgram.from_design_vector`)."""
     p = Problem(name)
-    d, scales = case.dim, state_scales(case)
-    labels = [*AXES[:d], *(f"v{axis}" for axis in AXES[:d])]
-    x = ca.vertcat(*(p.state(label, initial=None if initial is None else float(initial[i]),
-                             final=None if final is None else float(final[i]), scale=float(scales[i]),
-                             unit="m" if i < d else "m/s") for i, label in enumerate(labels)))
+    d, x = case.dim, cw_states(p, case, initial, final)
     A, B = case.matrices()
     rates = ca.mtimes(ca.sparsify(ca.DM(A)), x)
     if burn:  # eq. (2) under full thrust along U, |U| = 1 at the nodes (eq. 11), Hermite-Simpson (eqs. 5-8)

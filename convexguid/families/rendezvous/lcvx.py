@@ -36,7 +36,7 @@ import casadi as ca
 import numpy as np
 
 from convexguid.dynamics.clohessy_wiltshire import cw_hold_input_casadi, cw_stm_casadi
-from convexguid.families.rendezvous.arc_phases import AXES, state_scales
+from convexguid.families.rendezvous.arc_phases import AXES, cw_states
 from convexguid.families.rendezvous.case import BurnArc, Rendezvous, RendezvousPlan, ThrustPlan, state_columns
 from convexguid.families.rendezvous.figures import LcvxPlanFigures
 from convexguid.ocp import Problem
@@ -65,10 +65,7 @@ ON_THRESHOLD = 0.01
 def lcvx_problem(case: Rendezvous, steps: int) -> Problem:
     """The relaxed problem on ``steps`` equal zero-order-hold steps (see the module docstring)."""
     p = Problem(f"{case.name} (lcvx)")
-    d, scales = case.dim, state_scales(case)
-    labels = [*AXES[:d], *(f"v{axis}" for axis in AXES[:d])]
-    x = ca.vertcat(*(p.state(label, initial=float(case.x0[i]), final=float(case.xf[i]), scale=float(scales[i]),
-                             unit="m" if i < d else "m/s") for i, label in enumerate(labels)))
+    d, x = case.dim, cw_states(p, case, case.x0, case.xf)
     u = ca.vertcat(*(p.control(f"u{axis}", bounds=(-1.0, 1.0), scale=1.0) for axis in AXES[:d]))
     A, B = case.matrices()
     rates = ca.mtimes(ca.sparsify(ca.DM(A)), x) + ca.mtimes(ca.sparsify(ca.DM(B)), u)
