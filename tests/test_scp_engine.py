@@ -498,4 +498,4 @@ def test_phase_one_stops_at_the_first_point_well_inside_the_feasibility_toleranc
     accepted = [record.violation for record in state.history if record.accepted]  # each after its step
     assert accepted[-1] <= engine.RESTORED * settings.feasibility_tolerance < min(accepted[:-1])
     assert state.status == "converged" and state.message == "feasibility restored"
-    assert phase1.violation(state.ev) <= engine.RESTORED * settings.feasibility_tolerance
+    assert engine.max_violation(state.ev) <= engine.RESTORED * settings.feasibility_tolerance

@@ -76,100 +76,79 @@ class _Pattern:
         return sp.csc_matrix((data, self.indices, self.indptr), shape=self.shape)
 
 
-class SubproblemAssembler:
-    """Builds the trust-region subproblem for one program's block structure.
+class SubproblemRows:
+    """The constraint rows the lifted and the condensed subproblem share, with their pattern fixed once.
 
-    The structure (sizes, and the sparsity of every Jacobian block) is read from the
-    first :class:`Evaluation`: a block whose Jacobian is a dense array gets a dense
-    pattern; one given as ``scipy.sparse.coo_matrix`` keeps its pattern, and every later
-    evaluation must list the same ``(row, col)`` entries in the same order. With
-    ``curvature`` (the upper triangle ``(rows, cols)`` of a pattern) the Hessian gets that block on ``d``: the
-    convex model of the Lagrangian's curvature (:class:`~convexguid.scp.problem.CurvatureModel`).
+    The structure (sizes, and the sparsity of every Jacobian block) is read from the first :class:`Evaluation`: a
+    block whose Jacobian is a dense array gets a dense pattern; one given as ``scipy.sparse.coo_matrix`` keeps its
+    pattern, and every later evaluation must list the same ``(row, col)`` entries in the same order. ``lifted``
+    keeps the residuals as variables (``J d - y = -r`` rows, the output constraints on ``y``); otherwise the output
+    constraints take ``M J`` on the step, dense.
     """
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
-                 curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+                 curvature: tuple[np.ndarray, np.ndarray] | None, lifted: bool) -> None:
         self.n, self.m = n, first.residuals.size
-        linear = linear.sparse()
-        self.linear, self.outputs, self.scale = linear, outputs, scale
-        self.linear_cost, self.weights = linear_cost, weights
+        self.linear = linear = linear.sparse()
+        self.outputs, self.scale, self.linear_cost, self.weights = outputs, scale, linear_cost, weights
+        self.curvature = curvature
         self.n_ineq = sum(b.values.size for b in first.inequalities)
         self.n_eq = sum(b.values.size for b in first.equalities)
         cone_sizes = tuple(size for block in first.cones for size in block.sizes)
-        self.n_cones, n_cone_rows = len(cone_sizes), sum(cone_sizes)
+        self.n_cones = len(cone_sizes)
         n_a, n_g, n_o = linear.A.shape[0], linear.G.shape[0], outputs.M.shape[0]
+        lifted_rows = self.m if lifted else 0
         self.n_slack = n_o + self.n_ineq + self.n_eq + self.n_cones
-        self.num_z = n + self.m + self.n_slack
-        y0, so0, sg0, t0 = n, n + self.m, n + self.m + n_o, n + self.m + n_o + self.n_ineq
-        self.cones = Cones(zero=n_a + self.m, nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n,
-                           soc=cone_sizes)
-        self.layout = DualLayout(n_a, self.m, n_g, n_o, self.n_ineq, self.n_eq, n_cone_rows)
+        self.num_z = n + lifted_rows + self.n_slack
+        so0 = n + lifted_rows
+        sg0, t0 = so0 + n_o, so0 + n_o + self.n_ineq
+        self.cones = Cones(zero=n_a + lifted_rows,
+                           nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n, soc=cone_sizes)
+        self.layout = DualLayout(n_a, lifted_rows, n_g, n_o, self.n_ineq, self.n_eq, sum(cone_sizes))
         pat = _Pattern((self.cones.rows, self.num_z))
-        # zero cone: A d = b - A x ; J d - y = -r
+        # zero cone: A d = b - A x (; J d - y = -r)
         _add_jacobian(pat, 0, linear.A, n_a, n)
-        _add_jacobian(pat, n_a, first.residual_jacobian, self.m, n)
-        pat.add_diagonal(n_a, y0, self.m)
-        row = n_a + self.m
-        # nonnegative cone, in order: G, M y - s_o, lin. ineq, +eq, -eq, -slacks, trust region
+        if lifted:
+            _add_jacobian(pat, n_a, first.residual_jacobian, self.m, n)
+            pat.add_diagonal(n_a, n, self.m)
+        row = n_a + lifted_rows
+        # nonnegative cone, in order: G, the outputs less their slacks, then the softened rows and the trust region
         _add_jacobian(pat, row, linear.G, n_g, n)
         row += n_g
-        pat.add_sparse(row, y0, outputs.M)
+        if lifted:
+            pat.add_sparse(row, n, outputs.M)
+        else:
+            pat.add_dense(row, 0, n_o, n)
         pat.add_diagonal(row, so0, n_o)
-        row += n_o
-        row = add_softened_rows(pat, row, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
-        add_cone_rows(pat, row, first.cones, cone_sizes, t0 + self.n_eq)
+        row = _add_softened_rows(pat, row + n_o, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
+        _add_cone_rows(pat, row, first.cones, cone_sizes, t0 + self.n_eq)
         pat.finish()
         self._a_pattern = pat
-        self._m_data = sp.coo_matrix(outputs.M).data
-        # P: the curvature model's upper triangle on d (if any), then the residuals' diagonal 2W on y
-        self.curvature = curvature
-        rows, cols = curvature if curvature is not None else (np.zeros(0, int), np.zeros(0, int))
-        rows, cols = np.concatenate([rows, np.arange(n, n + self.m)]), np.concatenate([cols, np.arange(n, n + self.m)])
-        self._p_order = np.lexsort((rows, cols))
-        self._p_rows, self._p_cols = rows, cols
-        self._p_indices = rows[self._p_order].astype(np.int64)
-        self._p_indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.num_z))]).astype(np.int64)
-        self._p_residual = 2.0 * weights
-        self.q = np.concatenate([linear_cost, np.zeros(self.m), np.zeros(self.n_slack)])
         # the subproblem is solved for the scaled step d / scale, which keeps it well conditioned
-        self._column_scale = np.concatenate([scale, np.ones(self.m + self.n_slack)])
+        self._column_scale = np.concatenate([scale, np.ones(self.num_z - n)])
         self._a_data_scale = self._column_scale[np.repeat(np.arange(self.num_z), np.diff(pat.indptr))]
 
-    def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
-              hessian: np.ndarray | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on its
-        pattern, positive semidefinite)."""
-        n, lin = self.n, self.linear
-        g = _values(ev.inequalities)
-        e = _values(ev.equalities)
-        n_o = self.outputs.M.shape[0]
-        jac_g = [_jacobian_data(b.jacobian) for b in ev.inequalities]
+    def constraints(self, x: np.ndarray, ev: Evaluation, radius: float, head: list[np.ndarray],
+                    head_rhs: list[np.ndarray]) -> tuple[sp.csc_matrix, np.ndarray]:
+        """``(A, b)`` about ``x``: ``head`` the values of the rows up to the output constraints' slacks (in pattern
+        order), ``head_rhs`` their right-hand sides after ``A``'s and ``G``'s (which this fills in)."""
+        lin = self.linear
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
-        neg_e = [-j for j in jac_e]
-        a_blocks = [_jacobian_data(lin.A), _jacobian_data(ev.residual_jacobian), -np.ones(self.m),
-                    _jacobian_data(lin.G),
-                    self._m_data, -np.ones(n_o), *jac_g, -np.ones(self.n_ineq),
-                    *jac_e, -np.ones(self.n_eq), *neg_e, -np.ones(self.n_eq),
-                    -np.ones(self.n_slack), 1.0 / self.scale, -1.0 / self.scale,
-                    *(-_jacobian_data(b.jacobian) for b in ev.cones), -np.ones(self.n_cones)]
-        A = self._a_pattern.matrix(a_blocks)
+        A = self._a_pattern.matrix([
+            *head, *(_jacobian_data(b.jacobian) for b in ev.inequalities), -np.ones(self.n_ineq),
+            *jac_e, -np.ones(self.n_eq), *(-j for j in jac_e), -np.ones(self.n_eq), -np.ones(self.n_slack),
+            1.0 / self.scale, -1.0 / self.scale, *(-_jacobian_data(b.jacobian) for b in ev.cones),
+            -np.ones(self.n_cones)])
         A.data *= self._a_data_scale
         room = lin.h - lin.G @ x
         # a hard inequality the iterate meets only to the backend's tolerance must not make d = 0 infeasible
         room[(room < 0) & (room > -1e-7 * (1 + np.abs(lin.h)))] = 0.0
-        b = np.concatenate([lin.b - lin.A @ x, -ev.residuals, room, self.outputs.m,
-                            -g, -e, e, np.zeros(self.n_slack), np.full(2 * n, radius), _values(ev.cones)])
-        p_data = self._p_residual
-        if self.curvature is not None:
-            h = np.zeros(self.curvature[0].size) if hessian is None else hessian
-            p_data = np.concatenate([h, p_data])
-        p_data = p_data * self._column_scale[self._p_rows] * self._column_scale[self._p_cols]
-        P = sp.csc_matrix((p_data[self._p_order], self._p_indices, self._p_indptr), shape=(self.num_z, self.num_z))
-        q = self.q.copy()
-        q[n + self.m:] = penalty
-        q *= self._column_scale
-        return ConicProgram(P, q, A, b, self.cones)
+        e = _values(ev.equalities)
+        lifted_rhs, output_rhs = head_rhs
+        b = np.concatenate([lin.b - lin.A @ x, lifted_rhs, room, output_rhs, -_values(ev.inequalities), -e, e,
+                            np.zeros(self.n_slack), np.full(2 * self.n, radius), _values(ev.cones)])
+        return A, b
 
     def multipliers(self, z: np.ndarray) -> Multipliers:
         """The nonlinear program's multipliers from the subproblem's row duals (see ``DualLayout``)."""
@@ -178,6 +157,46 @@ class SubproblemAssembler:
     def step(self, z: np.ndarray) -> np.ndarray:
         """The step ``d`` from a subproblem solution (whose first block is ``d`` in scaled units)."""
         return z[: self.n] * self.scale
+
+
+class SubproblemAssembler(SubproblemRows):
+    """Builds the lifted trust-region subproblem for one program's block structure (:class:`SubproblemRows`). With
+    ``curvature`` (the upper triangle ``(rows, cols)`` of a pattern) the Hessian gets that block on ``d``: the
+    convex model of the Lagrangian's curvature (:class:`~convexguid.scp.problem.CurvatureModel`).
+    """
+
+    def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
+                 scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
+                 curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        super().__init__(n, first, linear, outputs, scale, linear_cost, weights, curvature, lifted=True)
+        self._m_data = sp.coo_matrix(outputs.M).data
+        # P: the curvature model's upper triangle on d (if any), then the residuals' diagonal 2W on y
+        rows, cols = curvature if curvature is not None else (np.zeros(0, int), np.zeros(0, int))
+        rows, cols = np.concatenate([rows, np.arange(n, n + self.m)]), np.concatenate([cols, np.arange(n, n + self.m)])
+        self._p_order = np.lexsort((rows, cols))
+        self._p_rows, self._p_cols = rows, cols
+        self._p_indices = rows[self._p_order].astype(np.int64)
+        self._p_indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.num_z))]).astype(np.int64)
+        self._p_residual = 2.0 * weights
+        self.q = np.concatenate([linear_cost, np.zeros(self.m), np.zeros(self.n_slack)])
+
+    def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
+              hessian: np.ndarray | None = None) -> ConicProgram:
+        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on its
+        pattern, positive semidefinite)."""
+        head = [_jacobian_data(self.linear.A), _jacobian_data(ev.residual_jacobian), -np.ones(self.m),
+                _jacobian_data(self.linear.G), self._m_data, -np.ones(self.outputs.M.shape[0])]
+        A, b = self.constraints(x, ev, radius, head, [-ev.residuals, self.outputs.m])
+        p_data = self._p_residual
+        if self.curvature is not None:
+            h = np.zeros(self.curvature[0].size) if hessian is None else hessian
+            p_data = np.concatenate([h, p_data])
+        p_data = p_data * self._column_scale[self._p_rows] * self._column_scale[self._p_cols]
+        P = sp.csc_matrix((p_data[self._p_order], self._p_indices, self._p_indptr), shape=(self.num_z, self.num_z))
+        q = self.q.copy()
+        q[self.n + self.m:] = penalty
+        q *= self._column_scale
+        return ConicProgram(P, q, A, b, self.cones)
 
 
 @dataclass(frozen=True)
@@ -209,7 +228,7 @@ class DualLayout:
                            linear_inequality=g.copy(), cone=cone)
 
 
-def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
+def _add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
                       counts: tuple[int, int, int]) -> int:
     """The rows after the output constraints, shared by the lifted and the condensed subproblem.
 
@@ -236,7 +255,7 @@ def add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts
     return row + 2 * n
 
 
-def add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...], slack0: int) -> None:
+def _add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...], slack0: int) -> None:
     """The second-order cones' rows from ``row`` on, shared by the lifted and the condensed subproblem: each cone's
     map :math:`v + F d`, its slack (columns from ``slack0``, one a cone) on its first row."""
     for block in cones:

@@ -23,7 +23,7 @@ repair, not of the problem as stated, and the message names the repair; otherwis
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -93,9 +93,7 @@ class RepairRound:
     worst: str
 
     def to_dict(self) -> dict:
-        return {"round": self.round, "repair": self.repair, "status": self.status, "iterations": self.iterations,
-                "objective": self.objective, "passed": self.passed, "max_violation": self.max_violation,
-                "final_state_error": self.final_state_error, "worst": self.worst}
+        return asdict(self)
 
 
 @dataclass

@@ -39,6 +39,7 @@ import numpy as np
 from convexguid.backends.base import Backend, BackendResult
 from convexguid.scp.condensed import CondensedAssembler, CurvedTerms
 from convexguid.scp.lagrangian import Multipliers, WorkingSet
+from convexguid.scp.merit import max_violation
 from convexguid.scp.problem import Evaluation
 
 if TYPE_CHECKING:
@@ -146,7 +147,7 @@ class CurvedSubproblem:
         or on a small program near feasibility whose linear steps keep reaching the trust region (see the module
         docstring)."""
         algo = self.algo
-        near = algo.violation(state.ev) <= CURVED_VIOLATION * algo.settings.feasibility_tolerance
+        near = max_violation(state.ev) <= CURVED_VIOLATION * algo.settings.feasibility_tolerance
         return bool(state.polish) or (near and state.pinned >= CRAWL and not algo.phase1
                                       and algo.program.num_variables <= CURVED_SIZE)
 

@@ -178,12 +178,7 @@ class SecondOrderModels:
         The working set drops rows that depend on others to its rank tolerance; a hard boundary condition may be
         one of them, and no later subproblem may start off it.
         """
-        A = self.linear.A
-        if not A.shape[0]:
-            return u
-        dense = A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
-        miss = dense @ (x + u * self.scale) - self.linear.b
-        return u - np.linalg.lstsq(dense * self.scale, miss, rcond=None)[0]
+        return u + self.linear.onto_equalities(x + u * self.scale, self.scale)
 
     def broken_bounds(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Mask of the hard inequality rows ``G x <= h`` that the scaled step ``u`` from ``x`` breaks."""
@@ -191,10 +186,6 @@ class SecondOrderModels:
             return np.zeros(0, dtype=bool)
         gap = self.linear.G @ (x + u * self.scale) - self.linear.h
         return gap > 1e-9 * (1 + np.abs(self.linear.h))
-
-    def working_values(self, model: LocalModel, raw: Evaluation, x: np.ndarray) -> np.ndarray:
-        """The values of ``model`` 's working set at another point (``raw`` evaluated there)."""
-        return model.working.values(raw, self.linear, self.outputs, x)
 
 
 def linearized_violation(raw: Evaluation, outputs: OutputConstraints, d: np.ndarray) -> float:

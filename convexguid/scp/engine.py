@@ -8,7 +8,7 @@ start point into an :class:`~convexguid.scp.state.IterationState`, and each
 2. assemble the trust-region subproblem with penalized slacks, lifted (:mod:`convexguid.scp.assembly`)
    or condensed (:mod:`convexguid.scp.condensed`) as decided once per run from the backend setting
    and the program's first evaluation (:mod:`convexguid.scp.choice`), and solve it with the chosen
-   backend (:class:`~convexguid.scp.policies.BackendRetry` on a numerical failure);
+   backend (a numerical failure retried with a smaller radius, ``max_backend_failures`` times in a row);
 3. judge the step by the ratio of actual to predicted decrease of the exact-penalty merit
 
    .. math::
@@ -59,7 +59,7 @@ from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
 from convexguid.scp.endgame import SecondOrderModels, linearized_violation
-from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, jacobian_structure
+from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, has_jacobian
 from convexguid.scp.merit import (
     decrease_ratio,
     describe_violations,
@@ -70,7 +70,7 @@ from convexguid.scp.merit import (
 )
 from convexguid.scp.newton import Candidate, newton_candidate
 from convexguid.scp.optimality import certified_by_least_squares, certified_here, finish_optimal, kkt_met, measure_kkt
-from convexguid.scp.policies import BackendRetry, FunnelPolicy, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
+from convexguid.scp.policies import FunnelPolicy, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import CurvatureModel, Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import restore_start, run_phase1
 from convexguid.scp.state import IterationRecord, IterationState, SCPResult, merge_results
@@ -115,7 +115,6 @@ class SCPAlgorithm:
         self.trust_region = TrustRegionPolicy.from_settings(settings)
         self.penalty = PenaltyPolicy.from_settings(settings)
         self.correction = SecondOrderCorrection.from_settings(settings)
-        self.retry = BackendRetry.from_settings(settings)
         self.funnel = FunnelPolicy()
         self.weights, self.cost = program.residual_weights(), program.linear_cost()
         self.outputs = program.output_constraints()
@@ -142,11 +141,11 @@ class SCPAlgorithm:
             state.convexify_time_s += time.perf_counter() - t
         return raw, ev
 
-    def _objective(self, ev: Evaluation, x: np.ndarray) -> float:
+    def objective(self, ev: Evaluation, x: np.ndarray) -> float:
         return objective_value(ev, self.weights, self.cost, x)
 
-    def _merit(self, ev: Evaluation, x: np.ndarray, rho: float) -> float:
-        return self._objective(ev, x) + rho * penalty_sum(ev)
+    def merit(self, ev: Evaluation, x: np.ndarray, rho: float) -> float:
+        return self.objective(ev, x) + rho * penalty_sum(ev)
 
     # --- the loop ---------------------------------------------------------------------------
     def initialize(self, x0: np.ndarray | None = None, penalty: float | None = None) -> IterationState:
@@ -161,13 +160,13 @@ class SCPAlgorithm:
         infeasible = not restored.feasible
         x = x if infeasible else restored.x
         raw, ev = self._evaluate(None, x, jacobians=True)
-        self.objective_at_start = self._objective(ev, x)
+        self.objective_at_start = self.objective(ev, x)
         # the unit of the penalty weights: the objective at the start, or the change of its linear part when every
         # variable moves by its scale, whichever is larger (a terminal cost that is zero at the start has a size)
         self.objective_size = max(abs(self.objective_at_start), float(np.abs(self.cost) @ self.scale))
         rho = self.penalty.initial(self.objective_size) if penalty is None else penalty
         state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
-                               merit=self._merit(ev, x, rho), penalty=rho, radius=self.settings.trust_region_max
+                               merit=self.merit(ev, x, rho), penalty=rho, radius=self.settings.trust_region_max
                                if getattr(self.program, "affine", False) else self.trust_region.initial,
                                started=started,
                                funnel=self.funnel.initial(penalty_sum(ev)) if self.settings.funnel else None)
@@ -183,7 +182,7 @@ class SCPAlgorithm:
                                        else (self.curvature.rows, self.curvature.cols))
             n = self.program.num_variables
             if (self.settings.second_order and hasattr(self.program, "lagrangian_hessian")
-                    and jacobian_structure(raw, n).nnz and n <= MAX_DENSE_SIZE):
+                    and has_jacobian(raw) and n <= MAX_DENSE_SIZE):
                 self.second_order = SecondOrderModels(self.program, self.linear, self.scale, self.weights,
                                                       self.cost, self.outputs)
                 self.curved = CurvedSubproblem(self)
@@ -253,7 +252,7 @@ class SCPAlgorithm:
             state.failures += 1
             state.radius = self.trust_region.after_failure(state.radius)
             self.record(state, 0.0, float("nan"), False, result)
-            if not self.retry.retry(state.failures):
+            if state.failures > self.settings.max_backend_failures:
                 state.finish("solver_error", f"backend {self.solver_label} returned {result.status} "
                                              f"{state.failures} times in a row")
             return self._check_limit(state)
@@ -270,7 +269,7 @@ class SCPAlgorithm:
         predicted = state.merit - model
         x_new = state.x + d
         raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
-        merit_new = self._merit(ev_new, x_new, state.penalty)
+        merit_new = self.merit(ev_new, x_new, state.penalty)
         ratio = decrease_ratio(state.merit - merit_new, predicted)
         linearized = linearized_violation(state.raw, self.outputs, d)
         predicted_objective = state.objective - (model - state.penalty * linearized)
@@ -280,7 +279,7 @@ class SCPAlgorithm:
             if corrected.usable:
                 x_soc = state.x + assembler.step(corrected.x)
                 _, ev_soc = self._evaluate(state, x_soc, jacobians=False)
-                merit_soc = self._merit(ev_soc, x_soc, state.penalty)
+                merit_soc = self.merit(ev_soc, x_soc, state.penalty)
                 ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
                 if ratio_soc > ratio:
                     x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
@@ -292,7 +291,7 @@ class SCPAlgorithm:
             if newton.ratio < s.accept_ratio:
                 state.newton_radius = 0.25 * newton.step
             elif (newton.ratio >= self.trust_region.expand or ratio < s.accept_ratio
-                  or newton.merit <= self._merit(ev_new, x_new, newton.penalty)):
+                  or newton.merit <= self.merit(ev_new, x_new, newton.penalty)):
                 # the quadratic model predicted its merit well, or it does at least as well as the first-order point
                 self._take_newton(state, newton, result)
                 return self._check_limit(state)
@@ -302,11 +301,11 @@ class SCPAlgorithm:
             violation = penalty_sum(state.ev)
             accepted, ratio, state.funnel = self.funnel.decide(
                 state.funnel, accepted, ratio, violation, penalty_sum(ev_new),
-                state.objective - self._objective(ev_new, x_new), predicted_objective, violation - linearized)
+                state.objective - self.objective(ev_new, x_new), predicted_objective, violation - linearized)
         if accepted:
             state.x, state.merit = x_new, merit_new
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
-            state.objective = self._objective(state.ev, state.x)
+            state.objective = self.objective(state.ev, state.x)
             measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, ratio, step)
         self.record(state, step, ratio, accepted, result if curved is None else replace(result, status="curved"))
@@ -344,12 +343,12 @@ class SCPAlgorithm:
         largest, 13 iterations to the same time. A softened row whose violation the subproblem kept has its
         multiplier at the weight, so a weight that is still needed is never lowered.
         """
-        if self.phase1 or state.multipliers is None or self.violation(state.ev) > self.settings.second_order_violation:
+        if self.phase1 or state.multipliers is None or max_violation(state.ev) > self.settings.second_order_violation:
             return
         target = self.penalty.relaxed(state.penalty, state.multipliers.largest(), self.objective_size)
         if target is not None:
             state.penalty = target
-            state.merit = self._merit(state.ev, state.x, target)
+            state.merit = self.merit(state.ev, state.x, target)
 
     def _small(self, state: IterationState, step: float, predicted: float) -> bool:
         """The step, or the decrease the model predicted for it, is below the tolerance (or the radius collapsed)."""
@@ -369,13 +368,8 @@ class SCPAlgorithm:
         """Make ``x`` the iterate: its evaluation with Jacobians, objective and merit (with weight ``penalty``)."""
         state.x, state.penalty = x, penalty
         state.raw, state.ev = self._evaluate(state, x, jacobians=True)
-        state.objective = self._objective(state.ev, x)
-        state.merit = self._merit(state.ev, x, penalty)
-
-    merit = _merit
-    objective = _objective
-    ratio = staticmethod(decrease_ratio)
-    violation = staticmethod(max_violation)
+        state.objective = self.objective(state.ev, x)
+        state.merit = self.merit(state.ev, x, penalty)
 
     def _take_newton(self, state: IterationState, newton: Candidate, result: BackendResult) -> None:
         """Move to Newton's trial point (its penalty weight and working-set multipliers come along)."""
@@ -439,7 +433,7 @@ class SCPAlgorithm:
             # A stationary point of the penalty function that violates the constraints:
             # the penalty is below the multipliers; raise it and go on.
             state.penalty = rho
-            state.merit = self._merit(state.ev, state.x, rho)
+            state.merit = self.merit(state.ev, state.x, rho)
             state.radius = self.trust_region.after_penalty_change(state.radius)
             return
         # at the largest penalty, or stalled by round-off just above the tolerance: restore feasibility directly

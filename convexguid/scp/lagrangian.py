@@ -1,32 +1,18 @@
-"""The Lagrangian of the nonlinear program: multipliers, its exact Hessian, and a convex model of it.
+"""The Lagrangian of the nonlinear program: its multipliers, its gradient, and the working set they define.
 
-The engine's subproblem linearizes the constraints. Near a solution that is a first-order model of
-a problem whose curvature lives in its constraints (the rigid-body defects, the keep-out cones, the
-unit-thrust direction), and the iteration converges like a first-order method: linearly, with a
-trust region that has to shrink onto the answer. Sequential quadratic programming keeps the
-curvature: with the multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem,
+With the multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem (:class:`Multipliers`, read off its
+dual) the Lagrangian's Hessian is
 
 .. math::
 
     \\nabla^2_{xx} L = 2 J_r^T W J_r + \\sum_i \\omega_i \\nabla^2 r_i + \\sum_j \\mu_j \\nabla^2 g_j
     + \\sum_k \\lambda_k \\nabla^2 e_k ,
 
-where :math:`\\omega = 2 W r + M^T \\nu` collects the objective's and the output constraints' weight
-on the residuals. The first term is the Gauss-Newton part every subproblem already has; this module
-reads the rest from the program and makes the sum convex where it is not
-(:func:`convexified`): the quadratic subproblem must stay convex for the conic solvers, and it
-only needs to be convex on the directions the active constraints leave free. Adding
-:math:`\\gamma A^T A` over the active constraint rows :math:`A` does not change the model on those
-directions and, for :math:`\\gamma` large enough, makes the Hessian positive definite whenever its
-reduced Hessian is (Finsler's lemma; Nocedal & Wright, *Numerical Optimization*, 2nd ed.,
-Thm. 12.6 and Sec. 17.3, the augmented Lagrangian). Where the reduced Hessian itself is indefinite
-a multiple of the identity is added (Levenberg; Nocedal & Wright Sec. 3.4) and the direction of
-negative curvature is kept: a stationary point with one is not a minimum
-(:func:`negative_curvature`).
-
-**Second derivatives** come from the program (``lagrangian_hessian(x, weights)``, exact: CasADi's for every
-``convexguid.ocp`` problem, the families' own): a program without one gets no end game, and no Hessian is
-differenced in the loop.
+where :math:`\\omega = 2 W r + M^T \\nu` collects the objective's and the output constraints' weight on the
+residuals (:class:`CurvatureWeights`). The first term is the Gauss-Newton part every subproblem already has; the
+rest comes from the program (``lagrangian_hessian(x, weights)``, exact: CasADi's for every ``convexguid.ocp``
+problem, the families' own), and a program without one gets no end game: no Hessian is differenced in the loop.
+The end game (:mod:`convexguid.scp.endgame`, :mod:`convexguid.scp.curved`) takes it on the :class:`WorkingSet`.
 """
 
 from __future__ import annotations
@@ -117,26 +103,11 @@ def _transpose_times(jacobian, y: np.ndarray):
     return jacobian.T @ y
 
 
-def jacobian_structure(ev: Evaluation, n: int) -> sp.csr_matrix:
-    """Boolean rows of every nonlinear map (residuals, inequalities, equalities): the pattern of their Jacobians.
-
-    Dense blocks count as dense (their zeros may fill in later); sparse ones keep their fixed pattern.
-    """
-    parts = [ev.residual_jacobian, *(b.jacobian for b in (*ev.inequalities, *ev.equalities))]
-    rows = []
-    for block in parts:
-        if block is None or block.shape[0] == 0:
-            continue
-        if sp.issparse(block):
-            coo = sp.coo_matrix(block)
-            rows.append(sp.csr_matrix((np.ones(coo.nnz), (coo.row, coo.col)), shape=coo.shape))
-        else:
-            rows.append(sp.csr_matrix(np.ones((block.shape[0], n))))
-    if not rows:
-        return sp.csr_matrix((0, n))
-    stacked = sp.vstack(rows).tocsr()
-    stacked.data[:] = 1.0
-    return stacked
+def has_jacobian(ev: Evaluation) -> bool:
+    """Whether some nonlinear map (residuals, inequalities, equalities) has a Jacobian entry: a dense block counts
+    whole, a sparse one by its fixed pattern."""
+    blocks = [ev.residual_jacobian, *(b.jacobian for b in (*ev.inequalities, *ev.equalities))]
+    return any(b is not None and b.shape[0] > 0 and (not sp.issparse(b) or b.nnz > 0) for b in blocks)
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from convexguid.scp.endgame import LocalModel, NewtonStep, linearized_violation
+from convexguid.scp.merit import decrease_ratio, max_violation
 from convexguid.scp.problem import Evaluation
 
 if TYPE_CHECKING:
@@ -63,7 +64,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     s, models = algo.settings, algo.second_order
     if models is None or algo.phase1 or state.multipliers is None:
         return None
-    if algo.violation(state.ev) > s.second_order_violation:
+    if max_violation(state.ev) > s.second_order_violation:
         return None
     if state.multipliers.cone_active():
         # a cone holds with equality: the equality-constrained step knows no cones (the curved and first-order
@@ -92,15 +93,15 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
                          + rho * linearized_violation(state.raw, algo.outputs, d))
     x_new, ev_new, raw_new = algo.trial(state, newton.step)
     merit_new = algo.merit(ev_new, x_new, rho)
-    ratio = algo.ratio(merit - merit_new, predicted)
+    ratio = decrease_ratio(merit - merit_new, predicted)
     if ratio < algo.correction.threshold:
-        corrected = newton.step + model.correction(models.working_values(model, raw_new, x_new))
+        corrected = newton.step + model.correction(model.working.values(raw_new, models.linear, algo.outputs, x_new))
         corrected = models.onto_equalities(state.x, corrected)
         if (np.max(np.abs(corrected), initial=0.0) <= 2.0 * state.radius
                 and not np.any(models.broken_bounds(state.x, corrected))):
             x_soc, ev_soc, _ = algo.trial(state, corrected)
             merit_soc = algo.merit(ev_soc, x_soc, rho)
-            ratio_soc = algo.ratio(merit - merit_soc, predicted)
+            ratio_soc = decrease_ratio(merit - merit_soc, predicted)
             if ratio_soc > ratio:
                 x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
     step = float(np.max(np.abs(x_new - state.x) / algo.scale, initial=0.0))
@@ -110,7 +111,11 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
 def _within_bounds(algo: SCPAlgorithm, state: IterationState, model: LocalModel) -> tuple[LocalModel, NewtonStep]:
     """Newton's step on the hard equalities and within the hard inequalities (see the module docstring)."""
     models = algo.second_order
-    newton = _on_equalities(algo, state, model.newton())
+
+    def on_equalities(newton: NewtonStep) -> NewtonStep:
+        return newton if newton.step is None else replace(newton, step=models.onto_equalities(state.x, newton.step))
+
+    newton = on_equalities(model.newton())
     for _ in range(BOUND_ROUNDS):
         if newton.step is None:
             return model, newton
@@ -118,13 +123,7 @@ def _within_bounds(algo: SCPAlgorithm, state: IterationState, model: LocalModel)
         if not np.any(broken):
             return model, newton
         model = models.with_bounds(model, state.raw, state.x, broken)
-        newton = _on_equalities(algo, state, model.newton())
+        newton = on_equalities(model.newton())
     if newton.step is not None and np.any(models.broken_bounds(state.x, newton.step)):
         newton = replace(newton, step=None)
     return model, newton
-
-
-def _on_equalities(algo: SCPAlgorithm, state: IterationState, newton: NewtonStep) -> NewtonStep:
-    if newton.step is None:
-        return newton
-    return replace(newton, step=algo.second_order.onto_equalities(state.x, newton.step))

@@ -20,6 +20,7 @@ from scipy.optimize import lsq_linear
 from convexguid.backends.base import BackendResult
 from convexguid.scp.kkt import kkt_residuals
 from convexguid.scp.lagrangian import Multipliers, WorkingSet, objective_gradient
+from convexguid.scp.merit import max_violation
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import SCPAlgorithm
@@ -36,7 +37,7 @@ def measure_kkt(algo: SCPAlgorithm, state: IterationState) -> None:
     state.kkt = kkt_residuals(state.x, state.raw, state.multipliers, weights=algo.weights, cost=algo.cost,
                               linear=algo.linear, outputs=algo.outputs, scale=algo.scale,
                               objective=state.objective, objective_at_start=algo.objective_at_start,
-                              feasibility=algo.violation(state.ev))
+                              feasibility=max_violation(state.ev))
 
 
 def kkt_met(algo: SCPAlgorithm, state: IterationState) -> bool:

@@ -1,8 +1,8 @@
-"""The named rules of the SCP step: trust region, penalty weight, second-order correction, backend retry.
+"""The named rules of the SCP step: trust region, penalty weight, funnel, second-order correction.
 
 Each policy is a small object built from :class:`~convexguid.scp.problem.SCPSettings`; the
 engine asks it one question at a time (how far may the next step go, how heavy is the
-penalty, is a correction worth a second solve, may a failed solve be retried), so a rule can
+penalty, is a correction worth a second solve), so a rule can
 be read, tested and replaced on its own.
 """
 
@@ -211,17 +211,3 @@ class SecondOrderCorrection:
 
         return replace(at_x, inequalities=shift(at_x.inequalities, at_trial.inequalities),
                        equalities=shift(at_x.equalities, at_trial.equalities))
-
-
-@dataclass(frozen=True)
-class BackendRetry:
-    """How many numerical failures of the convex solver in a row are retried (each with a smaller radius)."""
-
-    max_failures: int
-
-    @classmethod
-    def from_settings(cls, s: SCPSettings) -> BackendRetry:
-        return cls(s.max_backend_failures)
-
-    def retry(self, failures: int) -> bool:
-        return failures <= self.max_failures

@@ -103,6 +103,13 @@ class LinearConstraints:
         """
         return replace(self, A=_nonzeros(self.A), G=_nonzeros(self.G))
 
+    def onto_equalities(self, x: np.ndarray, scale: np.ndarray) -> np.ndarray:
+        """The least change :math:`v` (scaled, least norm) with :math:`A (x + S v) = b`."""
+        if not self.A.shape[0]:
+            return np.zeros(x.size)
+        dense = self.A.toarray() if sp.issparse(self.A) else np.asarray(self.A, dtype=float)
+        return np.linalg.lstsq(dense * scale, self.b - dense @ x, rcond=None)[0]
+
 
 def _nonzeros(matrix: np.ndarray | sp.spmatrix) -> sp.coo_matrix:
     coo = sp.coo_matrix(matrix, dtype=float)

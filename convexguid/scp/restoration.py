@@ -73,8 +73,7 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
     n, n_a, n_g = x0.size, lin.A.shape[0], lin.G.shape[0]
     if n_g == 0 and n_a <= n:
         # equalities only: the nearest point is the least-norm solution of A S v = b - A x0, in closed form
-        dense = lin.A.toarray() if sp.issparse(lin.A) else np.asarray(lin.A, dtype=float)
-        v = np.linalg.lstsq(dense * scale, lin.b - dense @ x0, rcond=None)[0]
+        v = lin.onto_equalities(x0, scale)
         if linear_violation(lin, x0 + scale * v) <= tolerance:
             return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
     A = sp.csc_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))

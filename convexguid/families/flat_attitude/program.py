@@ -36,9 +36,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.dynamics.rigid_body import euler_torque
+from convexguid.families.flat_attitude.complex_step import pointwise_jacobian, pointwise_jacobians
 from convexguid.geometry import PointingCone
 from convexguid.rotations import euler321_body_rates, euler321_rates_from_body, euler321_to_dcm
-from convexguid.scp.derivatives import pointwise_jacobian, pointwise_jacobians
 from convexguid.scp.problem import (
     ConstraintBlock,
     Evaluation,
