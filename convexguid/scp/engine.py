@@ -288,20 +288,14 @@ class SCPAlgorithm:
         if curved is None:
             state.pinned = state.pinned + 1 if step >= PINNED * state.radius else 0
         if newton is not None:
-            if newton.ratio < s.accept_ratio:
+            if not newton.accepted:
                 state.newton_radius = 0.25 * newton.step
             elif (newton.ratio >= self.trust_region.expand or ratio < s.accept_ratio
                   or newton.merit <= self.merit(ev_new, x_new, newton.penalty)):
                 # the quadratic model predicted its merit well, or it does at least as well as the first-order point
                 self._take_newton(state, newton, result)
                 return self._check_limit(state)
-        accepted = ratio >= s.accept_ratio
-        if state.funnel is not None and not self.phase1:
-            # the merit's ratio test, or else the funnel (its ratio then updates the radius)
-            violation = penalty_sum(state.ev)
-            accepted, ratio, state.funnel = self.funnel.decide(
-                state.funnel, accepted, ratio, violation, penalty_sum(ev_new),
-                state.objective - self.objective(ev_new, x_new), predicted_objective, violation - linearized)
+        accepted, ratio, state.funnel = self.judged(state, ratio, x_new, ev_new, predicted_objective, linearized)
         if accepted:
             state.x, state.merit = x_new, merit_new
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
@@ -321,6 +315,19 @@ class SCPAlgorithm:
         if self._small(state, step, predicted):
             self._stalled(state)
         return self._check_limit(state)
+
+    def judged(self, state: IterationState, ratio: float, x_new: np.ndarray, ev_new: Evaluation,
+               predicted_objective: float, linearized: float) -> tuple[bool, float, float | None]:
+        """``(accepted, ratio, funnel width)`` of a trial point: the merit's ratio test, or else the funnel, whose
+        ratio then updates the radius (:class:`~convexguid.scp.policies.FunnelPolicy`); ``linearized`` is the
+        violation the step's linearization predicted, ``predicted_objective`` the objective's predicted decrease."""
+        accepted = ratio >= self.settings.accept_ratio
+        if state.funnel is None or self.phase1:
+            return accepted, ratio, state.funnel
+        violation = penalty_sum(state.ev)
+        return self.funnel.decide(state.funnel, accepted, ratio, violation, penalty_sum(ev_new),
+                                  state.objective - self.objective(ev_new, x_new), predicted_objective,
+                                  violation - linearized)
 
     def _curvature_values(self, state: IterationState) -> np.ndarray:
         """The program's convex curvature model at the iterate, weighted by the state's multipliers."""
@@ -378,6 +385,7 @@ class SCPAlgorithm:
             # Nocedal & Wright): freed at once, the next full step overshoots where the model no longer holds
             state.newton_radius = np.inf if newton.whole else 2.0 * state.newton_radius
         self.move_to(state, newton.x, newton.penalty)
+        state.funnel = newton.funnel
         state.multipliers = newton.model.working.multipliers(newton.newton.multipliers, state.multipliers)
         measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
