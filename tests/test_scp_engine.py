@@ -488,10 +488,8 @@ def test_phase_one_stops_at_the_first_point_well_inside_the_feasibility_toleranc
     """The elastic phase 1 seeks a feasible point for the main loop, not the violation's minimum: it ends at the
     first accepted iterate within engine.RESTORED of the tolerance (before, COPS' hang glider spent 140 phase-1
     iterations taking the violation from 2e-9 to 1e-12)."""
-    from convexguid.scp.restoration import ElasticPhase1
-
     settings = SCPSettings(penalty=1.0, penalty_max=1.0, penalty_unit="absolute")
-    phase1 = engine.SCPAlgorithm(ElasticPhase1(ShiftedDisk()), settings, phase1=True)
+    phase1 = engine.SCPAlgorithm(ShiftedDisk(), settings, phase1=True)
     state = phase1.initialize(np.array([3.0, 3.0]))  # violation 16
     while not state.finished:
         phase1.step(state)

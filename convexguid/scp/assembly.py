@@ -230,13 +230,10 @@ class DualLayout:
 
 def _add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
                       counts: tuple[int, int, int]) -> int:
-    """The rows after the output constraints, shared by the lifted and the condensed subproblem.
-
-    In order: the linearized inequalities with their slacks, the linearized equalities twice (``+`` and ``-``)
-    with theirs, the nonnegativity of every slack, and the trust region on the step's ``n`` columns.
-    ``starts`` are the first columns of the output, inequality and equality slacks; ``counts`` the numbers
-    of inequality rows, equality rows and slacks. Returns the next row.
-    """
+    """The rows after the output constraints: the linearized inequalities with their slacks, the linearized
+    equalities twice (``+`` and ``-``) with theirs, the nonnegativity of every slack, and the trust region on the
+    step's ``n`` columns. ``starts`` are the first columns of the output, inequality and equality slacks; ``counts``
+    the numbers of inequality rows, equality rows and slacks. Returns the next row."""
     so0, sg0, t0 = starts
     n_ineq, n_eq, n_slack = counts
     for block in first.inequalities:
@@ -256,8 +253,8 @@ def _add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, start
 
 
 def _add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...], slack0: int) -> None:
-    """The second-order cones' rows from ``row`` on, shared by the lifted and the condensed subproblem: each cone's
-    map :math:`v + F d`, its slack (columns from ``slack0``, one a cone) on its first row."""
+    """The second-order cones' rows from ``row`` on: each cone's map :math:`v + F d`, its slack (columns from
+    ``slack0``, one a cone) on its first row."""
     for block in cones:
         pat.add_sparse(row, 0, block.jacobian)
         row += block.values.size

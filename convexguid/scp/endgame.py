@@ -68,6 +68,11 @@ def null_space_split(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return Q[:, :rank], Q[:, rank:], R[:rank, :rank], pivots[:rank]
 
 
+def least_norm_step(Y: np.ndarray, R: np.ndarray, pivots: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """:math:`-Y (R^T)^{-1} c_P`: the least-norm step onto the linearized rows of a :func:`null_space_split`."""
+    return Y @ la.solve_triangular(R, -values[pivots], trans="T") if pivots.size else np.zeros(Y.shape[0])
+
+
 def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, values: np.ndarray) -> NewtonStep:
     """The EQP step for gradient ``g``, Hessian ``H``, working-set rows ``A`` and values ``c`` (all scaled).
 
@@ -76,7 +81,7 @@ def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, val
     the dependent rows).
     """
     Y, Z, R, pivots = null_space_split(rows)
-    range_step = Y @ la.solve_triangular(R, -values[pivots], trans="T") if pivots.size else np.zeros(gradient.size)
+    range_step = least_norm_step(Y, R, pivots, values)
     reduced = Z.T @ hessian @ Z
     reduced = 0.5 * (reduced + reduced.T)
     if reduced.shape[0] == 0:
@@ -123,9 +128,7 @@ class LocalModel:
         form (Nocedal & Wright eq. 18.53), which keeps the step's null-space part.
         """
         Y, _, R, pivots = null_space_split(self.rows)
-        if not pivots.size:
-            return np.zeros(self.gradient.size)
-        return Y @ la.solve_triangular(R, -values[pivots], trans="T")
+        return least_norm_step(Y, R, pivots, values)
 
     def quadratic(self, u: np.ndarray) -> float:
         """:math:`\\nabla f^T d + \\tfrac12 u^T H u`: the objective part of the model."""

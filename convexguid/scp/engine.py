@@ -28,19 +28,15 @@ subproblems agree on, with the exact Hessian of the Lagrangian; and once a small
 the trust region there, its subproblem is the curved one (:mod:`convexguid.scp.curved`): that Hessian made convex on
 the working rows, with which the QP's own solver picks the active set.
 
-Statuses (:mod:`convexguid.scp.optimality`): ``converged`` only when the KKT conditions hold at a feasible
-iterate (:mod:`convexguid.scp.kkt`, stationarity and complementarity relative to the objective within
-``kkt_tolerance``), with the multipliers of the subproblem that led to it or of the one solved there, and the
-reduced Hessian shows no direction of negative curvature (a stationary point with one is a saddle: the engine
-steps off it along that direction and goes on, twice at most); ``unverified`` when the steps become small at a
-feasible point whose KKT residuals stay above tolerance even after polishing (the SQP subproblem of
-:mod:`convexguid.scp.curved` and least-squares multipliers, :data:`POLISH_ITERATIONS` stalls more; the message
-names the residuals);
-``infeasible`` only with a certificate: the hard linear constraints admit no point (an
-elastic LP, :func:`~convexguid.scp.restoration.restore_start`), or the elastic phase-1 problem
-(:class:`~convexguid.scp.restoration.ElasticPhase1`), run when the iterates stall infeasible at
-the largest penalty, itself stalls with the violation positive; ``max_iterations``; and
-``solver_error`` when the backend fails more often in a row than the retry policy allows.
+Statuses: ``converged`` only at a feasible KKT point (:mod:`convexguid.scp.kkt`, relative to the objective within
+``kkt_tolerance``) with no direction of negative curvature worth following (a saddle is stepped off, twice at most:
+:mod:`convexguid.scp.optimality`); ``unverified`` when the steps become small at a feasible point whose KKT
+residuals stay above tolerance after :data:`POLISH_ITERATIONS` more stalls of polishing (the message names them);
+``infeasible`` only with a certificate: the hard linear constraints admit no point
+(:func:`~convexguid.scp.restoration.restore_start`'s elastic LP), or the elastic phase-1 run
+(:func:`~convexguid.scp.restoration.run_phase1`), started when the iterates stall infeasible at the largest penalty,
+itself stalls with the violation positive; ``max_iterations``; and ``solver_error`` when the backend fails more
+often in a row than ``max_backend_failures``.
 """
 
 from __future__ import annotations
@@ -117,6 +113,8 @@ class SCPAlgorithm:
         self.correction = SecondOrderCorrection.from_settings(settings)
         self.funnel = FunnelPolicy()
         self.weights, self.cost = program.residual_weights(), program.linear_cost()
+        if phase1:  # the elastic program: the objective dropped, the violation alone minimised
+            self.weights, self.cost = np.zeros_like(self.weights), np.zeros(program.num_variables)
         self.outputs = program.output_constraints()
         self.linear = program.linear_constraints()  # fixed for the run: read once
         self.scale = program.variable_scale()

@@ -1,7 +1,5 @@
-"""First-order optimality (KKT) residuals of the nonlinear program, in the problem's own units.
-
-A small step proves nothing: a trust region that has collapsed also takes small steps. The engine
-stops on the Karush-Kuhn-Tucker conditions of
+"""First-order optimality (KKT) residuals of the nonlinear program, in the problem's own units: the engine stops on
+the Karush-Kuhn-Tucker conditions of
 
 .. math::
 

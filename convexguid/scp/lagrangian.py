@@ -17,7 +17,7 @@ The end game (:mod:`convexguid.scp.endgame`, :mod:`convexguid.scp.curved`) takes
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 import scipy.sparse as sp
@@ -128,14 +128,10 @@ class WorkingSet:
     equality: np.ndarray
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, WorkingSet) and all(
-            np.array_equal(a, b) for a, b in zip(self.masks, other.masks, strict=True))
+        return isinstance(other, WorkingSet) and all(np.array_equal(getattr(self, f.name), getattr(other, f.name))
+                                                     for f in fields(self))
 
     __hash__ = None
-
-    @property
-    def masks(self) -> tuple[np.ndarray, ...]:
-        return self.linear_inequality, self.output, self.inequality, self.equality
 
     @classmethod
     def at(cls, ev: Evaluation, multipliers: Multipliers, linear: LinearConstraints, outputs: OutputConstraints,

@@ -204,10 +204,7 @@ class SecondOrderCorrection:
     @staticmethod
     def shifted(at_x: Evaluation, at_trial: Evaluation, d: np.ndarray) -> Evaluation:
         """Constraint blocks at ``x`` whose values are :math:`c(x + d) - \\nabla c(x)\\, d` (Jacobians kept)."""
-
-        def shift(blocks_x, blocks_trial):
-            return tuple(replace(bx, values=bt.values - bx.jacobian @ d)
-                         for bx, bt in zip(blocks_x, blocks_trial, strict=True))
-
-        return replace(at_x, inequalities=shift(at_x.inequalities, at_trial.inequalities),
-                       equalities=shift(at_x.equalities, at_trial.equalities))
+        shifted = {kind: tuple(replace(bx, values=bt.values - bx.jacobian @ d)
+                               for bx, bt in zip(getattr(at_x, kind), getattr(at_trial, kind), strict=True))
+                   for kind in ("inequalities", "equalities")}
+        return replace(at_x, **shifted)

@@ -6,8 +6,8 @@ solution. :func:`restore_start` moves the start to the nearest point (in the sca
 the trust region) that meets them; if no such point exists, an elastic linear program
 certifies it: its optimal total slack, the least violation any point can have, is positive.
 
-:class:`ElasticPhase1` is the nonlinear counterpart: the same program with its objective
-dropped, so the SCP minimises the :math:`\\ell_1` violation of the nonlinear constraints alone.
+:func:`run_phase1` is the nonlinear counterpart: the same engine on the same program, its objective
+dropped (``phase1``), so the SCP minimises the :math:`\\ell_1` violation of the nonlinear constraints alone.
 When it stalls with the violation still positive, no nearby point is feasible (a local
 certificate of infeasibility; Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.2
 and 18.5 on elastic modes).
@@ -106,30 +106,9 @@ def _least_violation(A: sp.csc_matrix, rhs: np.ndarray, n_a: int, n_g: int) -> f
     return float(result.objective) if result.usable else float("inf")
 
 
-class ElasticPhase1:
-    """``program`` with its objective dropped: the SCP then minimises the constraint violation alone.
-
-    Everything else (start, scale, linear and output constraints, nonlinear maps, curvature)
-    is the wrapped program's.
-    """
-
-    def __init__(self, program: NonconvexProgram) -> None:
-        self._program = program
-        self.num_variables = program.num_variables
-
-    def residual_weights(self) -> np.ndarray:
-        return np.zeros_like(self._program.residual_weights())
-
-    def linear_cost(self) -> np.ndarray:
-        return np.zeros(self.num_variables)
-
-    def __getattr__(self, name: str):
-        return getattr(self._program, name)
-
-
 def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
-    """At the largest penalty and still infeasible: minimise the violation alone from ``state`` (an
-    :class:`ElasticPhase1` run of the same engine).
+    """At the largest penalty and still infeasible: minimise the violation alone from ``state`` (a phase-1 run of
+    the same engine, the objective dropped).
 
     A feasible point found this way restarts the main loop from it; a phase-1 stall with the violation positive is
     the certificate of infeasibility: local, or global when every map of the program is affine (a convex program).
@@ -140,7 +119,7 @@ def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
         return
     state.phase1_runs += 1
     settings = replace(algo.settings, penalty=1.0, penalty_max=1.0, penalty_unit="absolute")
-    phase1 = type(algo)(ElasticPhase1(algo.program), settings, algo.log, phase1=True)
+    phase1 = type(algo)(algo.program, settings, algo.log, phase1=True)
     p1 = phase1.initialize(state.x)
     while not p1.finished:
         phase1.step(p1)
