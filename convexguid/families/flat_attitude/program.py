@@ -32,6 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property, partial
 
+import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
@@ -232,26 +233,35 @@ class FlatAttitudeProgram:
         design vector (:math:`S_k` the node's row of the identity, of :math:`s D` and of :math:`s^2 D^{(2)}`), so
         :math:`\\nabla^2 (\\omega_k^T u_k) = S_k^T G_k S_k` with :math:`G_k` the 9 x 9 Hessian of
         :math:`\\omega_k^T \\Gamma_u`; likewise each cone at a path point through the interpolation row. The local
-        Hessians are forward differences of the complex-step local Jacobians: a few vectorized calls instead of
-        one evaluation of the whole program per column (the engine's generic differencing)."""
+        Hessians are exact (:class:`RowHessian`: CasADi's second derivatives of the same maps)."""
         p, n1 = self.problem, self.num_nodes
         z, zd, zdd = p.flat_derivatives(x)
         omega = np.asarray(weights.residual, dtype=float).reshape(n1, 3)
-        local = _weighted_local_hessian(lambda a, b, c: flat_torque(p.inertia, a, b, c), (z, zd, zdd), omega)
+        local = self._torque_hessian(np.hstack([z, zd, zdd]), omega)
         T = self._node_maps  # (node, 9, variables): S_k with each row for the three components
         H = np.einsum("kab,kbj->kaj", local, T).reshape(-1, self.num_variables)
         H = T.reshape(-1, self.num_variables).T @ H
         path = p.path_interpolation
         z_path, start = path @ z, 0
-        for cone in p.cones:
+        for hessian in self._cone_hessians:
             mu = np.asarray(weights.inequality[start: start + path.shape[0]], dtype=float)
             start += path.shape[0]
             if np.any(mu):
-                cone_local = _weighted_local_hessian(partial(cone_cosine, cone), (z_path,), mu[:, None])
+                cone_local = hessian(z_path, mu[:, None])
                 P = np.kron(path, np.eye(3)).reshape(path.shape[0], 3, self.num_variables)
                 H += P.reshape(-1, self.num_variables).T @ np.einsum("pab,pbj->paj", cone_local, P).reshape(
                     -1, self.num_variables)
         return 0.5 * (H + H.T)
+
+    @cached_property
+    def _torque_hessian(self) -> RowHessian:
+        p = self.problem
+        return RowHessian(lambda a, b, c: flat_torque(p.inertia, a, b, c), (3, 3, 3), 3, self.num_nodes)
+
+    @cached_property
+    def _cone_hessians(self) -> tuple[RowHessian, ...]:
+        rows = self.problem.path_interpolation.shape[0]
+        return tuple(RowHessian(partial(cone_cosine, cone), (3,), 1, rows) for cone in self.problem.cones)
 
     @cached_property
     def _node_maps(self) -> np.ndarray:
@@ -262,32 +272,28 @@ class FlatAttitudeProgram:
         return np.kron(rows.reshape(n1 * 3, n1), np.eye(3)).reshape(n1, 9, self.num_variables)
 
 
-LOCAL_STEP = 1e-7
-"""Forward-difference step of the local Hessians (rad, rad/s, rad/s^2): relative errors near 1e-7, as the engine's
-generic differencing leaves (the converged point is fixed by the KKT conditions, not by the Hessian)."""
+class RowHessian:
+    """Exact Hessians of :math:`w_k \\cdot f(\\text{row } k)` for a row-wise numpy map ``f`` of arguments ``widths``
+    wide with ``outputs`` values, over ``rows`` rows at once.
 
+    ``f`` is evaluated once on one row of CasADi symbols (numpy's functions act on object arrays element by element,
+    so the program's own map is differentiated, not a second statement of it); CasADi's Hessian of the weighted sum
+    is then mapped over the rows. Called with the arguments stacked ``(rows, sum(widths))`` and the weights
+    ``(rows, outputs)``, it returns ``(rows, q, q)``.
+    """
 
-def _weighted_local_hessian(f, args: tuple[np.ndarray, ...], weights: np.ndarray) -> np.ndarray:
-    """Per row ``k``: the Hessian of ``weights[k] . f(rows k of args)`` in the row's stacked inputs, ``(m, q, q)``."""
-    m = args[0].shape[0]
-    widths = [a.shape[1] for a in args]
+    def __init__(self, f, widths: tuple[int, ...], outputs: int, rows: int) -> None:
+        args = [ca.SX.sym(f"a{i}", width) for i, width in enumerate(widths)]
+        values = f(*(np.array([[a[j] for j in range(a.shape[0])]], dtype=object) for a in args))
+        weights = ca.SX.sym("w", outputs)
+        stacked = ca.vertcat(*args)
+        hessian = ca.hessian(ca.dot(weights, ca.vertcat(*np.ravel(values))), stacked)[0]
+        self._size = stacked.shape[0]
+        self._mapped = ca.Function("row_hessian", [stacked, weights], [ca.densify(hessian)]).map(rows)
 
-    def gradient(moved: list[np.ndarray]) -> np.ndarray:
-        jacobians = pointwise_jacobians(f, moved)
-        parts = [np.einsum("kp,kpq->kq", weights, j if j.ndim == 3 else j[:, None, :]) for j in jacobians]
-        return np.concatenate(parts, axis=1)
-
-    q = sum(widths)
-    out = np.empty((m, q, q))
-    base = gradient([np.asarray(a, dtype=float) for a in args])
-    column = 0
-    for i, width in enumerate(widths):
-        for j in range(width):
-            moved = [np.array(a, dtype=float) for a in args]
-            moved[i][:, j] += LOCAL_STEP
-            out[:, :, column] = (gradient(moved) - base) / LOCAL_STEP
-            column += 1
-    return 0.5 * (out + np.swapaxes(out, 1, 2))
+    def __call__(self, inputs: np.ndarray, weights: np.ndarray) -> np.ndarray:
+        out = self._mapped(np.asarray(inputs, dtype=float).T, np.asarray(weights, dtype=float).T).full()
+        return out.reshape(self._size, -1, self._size).transpose(1, 0, 2)
 
 
 def build_problem(spec) -> FlatAttitudeProblem:
