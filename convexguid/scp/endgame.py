@@ -165,14 +165,14 @@ class SecondOrderModels:
                                                                    multipliers.equality)))
         hessian = self.gauss_newton(raw) + curvature.multiply(np.outer(self.scale, self.scale)).toarray()
         gradient = objective_gradient(raw, self.weights, self.cost)
-        rows = (working.rows(raw, self.linear, self.outputs) @ sp.diags(self.scale)).toarray()
+        rows = working.rows(raw, self.linear, self.outputs) * self.scale
         return LocalModel(hessian, gradient * self.scale, working, rows,
                           working.values(raw, self.linear, self.outputs, x))
 
     def with_bounds(self, model: LocalModel, raw: Evaluation, x: np.ndarray, added: np.ndarray) -> LocalModel:
         """``model`` with the hard inequality rows ``added`` (a mask of ``G``'s rows) put into its working set."""
         working = replace(model.working, linear_inequality=model.working.linear_inequality | added)
-        rows = (working.rows(raw, self.linear, self.outputs) @ sp.diags(self.scale)).toarray()
+        rows = working.rows(raw, self.linear, self.outputs) * self.scale
         return replace(model, working=working, rows=rows, values=working.values(raw, self.linear, self.outputs, x))
 
     def onto_equalities(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:

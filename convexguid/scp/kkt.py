@@ -26,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from convexguid.scp.lagrangian import CurvatureWeights, Multipliers, lagrangian_gradient
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
@@ -69,7 +68,7 @@ def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, w
     """The KKT residuals of the program at ``x`` (``raw``: its evaluation there, with Jacobians)."""
     omega = multipliers.residual_weights(raw.residuals, weights, outputs.M)
     gradient = cost + lagrangian_gradient(raw, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
-    A, G = sp.csr_matrix(linear.A), sp.csr_matrix(linear.G)
+    A, G = linear.A, linear.G  # dense or sparse, as the program gives them
     if A.shape[0]:
         gradient = gradient + A.T @ multipliers.linear_equality
     if G.shape[0]:

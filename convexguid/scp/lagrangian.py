@@ -157,21 +157,19 @@ class WorkingSet:
         parts.append(_values_of(ev.equalities)[self.equality])
         return np.concatenate(parts)
 
-    def rows(self, ev: Evaluation, linear: LinearConstraints, outputs: OutputConstraints) -> sp.csr_matrix:
-        """The working rows' Jacobian at the point ``ev`` was evaluated (with Jacobians)."""
-        n = ev.residual_jacobian.shape[1] if ev.residual_jacobian is not None else None
-        parts = [sp.csr_matrix(linear.A, dtype=float), sp.csr_matrix(linear.G, dtype=float)[self.linear_inequality]]
-        n = parts[0].shape[1] if n is None else n
+    def rows(self, ev: Evaluation, linear: LinearConstraints, outputs: OutputConstraints) -> np.ndarray:
+        """The working rows' Jacobian at the point ``ev`` was evaluated (with Jacobians), dense (the end game's
+        programs are small: :data:`MAX_DENSE_SIZE`)."""
+        parts = [_dense_rows(linear.A, None), _dense_rows(linear.G, self.linear_inequality)]
         if outputs.M.shape[0]:
-            parts.append(sp.csr_matrix(outputs.M @ ev.residual_jacobian)[self.output])
+            parts.append(_dense_rows(outputs.M @ ev.residual_jacobian, self.output))
         for blocks, mask in ((ev.inequalities, self.inequality), (ev.equalities, self.equality)):
             start = 0
             for block in blocks:
                 size = block.values.size
-                parts.append(sp.csr_matrix(block.jacobian)[mask[start: start + size]])
+                parts.append(_dense_rows(block.jacobian, mask[start: start + size]))
                 start += size
-        parts = [p for p in parts if p.shape[0]]
-        return sp.vstack(parts).tocsr() if parts else sp.csr_matrix((0, n))
+        return np.vstack(parts)
 
     def multipliers(self, y: np.ndarray, like: Multipliers) -> Multipliers:
         """Working-set multipliers ``y`` (in row order) spread back over every constraint (zero off the set)."""
@@ -192,3 +190,12 @@ class WorkingSet:
 
 def _values_of(blocks) -> np.ndarray:
     return np.concatenate([b.values for b in blocks]) if blocks else np.zeros(0)
+
+
+def _dense_rows(matrix, mask: np.ndarray | None) -> np.ndarray:
+    """The rows of ``matrix`` (dense or sparse) that ``mask`` selects (all without one), as a dense array."""
+    if sp.issparse(matrix):
+        matrix = sp.csr_matrix(matrix)
+        return (matrix if mask is None else matrix[mask]).toarray()
+    matrix = np.asarray(matrix, dtype=float)
+    return matrix if mask is None else matrix[mask]

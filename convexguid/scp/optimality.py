@@ -149,7 +149,7 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     signed = rows.shape[0] - free - size
     lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(size, -np.inf),
                             np.zeros(cone_rows.shape[0])])
-    matrix = (sp.vstack([rows, cone_rows]) @ sp.diags(algo.scale)).T.toarray()
+    matrix = (np.vstack([rows, cone_rows.toarray()]) * algo.scale).T
     target = -objective_gradient(raw, algo.weights, algo.cost) * algo.scale
     fit = lsq_linear(matrix, target, bounds=(lower, np.full(lower.size, np.inf)), method="bvls")
     shape = Multipliers(np.zeros(size), np.zeros(values.size), np.zeros(out.size), np.zeros(free), np.zeros(gap.size))
