@@ -311,3 +311,33 @@ def test_a_wrong_statement_in_a_module_is_exit_2_naming_it(tmp_path, capsys):
     assert main(["solve", str(module), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "twice: state 'x': the name is already taken" in err and err.count("\n") == 1
+
+
+def test_a_statement_of_the_same_graph_reuses_its_derivatives_and_another_does_not():
+    """The derivative cache (convexguid.ocp.parts.DERIVATIVES) hands a statement built again the same CasADi
+    functions, and a statement whose maps differ by one constant its own; it keeps only its last few graphs."""
+    from convexguid.ocp.parts import DerivativeCache
+    from convexguid.ocp.solve import transcribe
+
+    def brachistochrone(g: float):
+        example = _example("brachistochrone")
+        original = example.G
+        example.G = g
+        try:
+            return transcribe(example.build(12))
+        finally:
+            example.G = original
+
+    first, again, other = brachistochrone(9.81), brachistochrone(9.81), brachistochrone(9.80)
+    assert first._defects is again._defects and first._hessian[0] is again._hessian[0]
+    assert other._defects is not first._defects and other._hessian[0] is not first._hessian[0]
+    z = first.initial_guess()
+    assert np.array_equal(np.asarray(first._defects(z)[0]), np.asarray(again._defects(z)[0]))
+    assert not np.allclose(np.asarray(first._defects(z)[0]), np.asarray(other._defects(z)[0]))
+
+    cache, built = DerivativeCache(size=2), []
+    x = ca.SX.sym("x")
+    for c in (1.0, 2.0, 3.0, 1.0):
+        cache.get("square", [x], [c * x**2], lambda c=c: built.append(c) or c)
+    assert built == [1.0, 2.0, 3.0, 1.0]  # the graph of 1.0 left when 3.0 came: built again
+    assert cache.get("square", [x], [3.0 * x**2], lambda: "new") == 3.0

@@ -35,7 +35,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.ocp.parts import SparsityPattern, coo_pattern
+from convexguid.ocp.parts import DERIVATIVES, SparsityPattern, coo_pattern
 from convexguid.scp.problem import CurvatureModel
 
 MAX_ELEMENT = 400
@@ -138,12 +138,17 @@ class ElementCurvature:
 
 def lagrangian_hessian(z: ca.SX, blocks: list[ca.SX]) -> tuple[ca.Function, SparsityPattern]:
     """CasADi's exact Hessian of :math:`\\sum_j w_j^T c_j(z)` for the constraint ``blocks`` :math:`c_j`, as a
-    function of ``z`` and one multiplier input per block, and its pattern (both triangles)."""
-    weights = [ca.SX.sym(f"w{j}", block.shape[0]) for j, block in enumerate(blocks)]
-    lagrangian = sum((ca.dot(w, block) for w, block in zip(weights, blocks, strict=True) if block.shape[0]),
-                     ca.SX(0))
-    hessian = ca.hessian(lagrangian, z)[0]
-    return ca.Function("hessian", [z, *weights], [hessian]), SparsityPattern(hessian.sparsity())
+    function of ``z`` and one multiplier input per block, and its pattern (both triangles); built once for a graph
+    (:data:`~convexguid.ocp.parts.DERIVATIVES`)."""
+
+    def build() -> tuple[ca.Function, SparsityPattern]:
+        weights = [ca.SX.sym(f"w{j}", block.shape[0]) for j, block in enumerate(blocks)]
+        lagrangian = sum((ca.dot(w, block) for w, block in zip(weights, blocks, strict=True) if block.shape[0]),
+                         ca.SX(0))
+        hessian = ca.hessian(lagrangian, z)[0]
+        return ca.Function("hessian", [z, *weights], [hessian]), SparsityPattern(hessian.sparsity())
+
+    return DERIVATIVES.get("lagrangian_hessian", [z], blocks, build)
 
 
 def interval_of_rows(program, num_equalities: int, num_epigraph: int) -> np.ndarray:

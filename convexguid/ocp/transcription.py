@@ -37,7 +37,7 @@ import scipy.sparse as sp
 from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
 from convexguid.ocp.curvature import ElementCurvature, interval_of_rows, lagrangian_hessian
 from convexguid.ocp.guess import flown_free_states
-from convexguid.ocp.parts import AffineCones, Margins, SparsityPattern, SymbolicNLP
+from convexguid.ocp.parts import DERIVATIVES, AffineCones, Margins, SparsityPattern, SymbolicNLP
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
 from convexguid.scp.problem import ConstraintBlock, CurvatureModel, Evaluation, LinearConstraints, OutputConstraints
 
@@ -244,16 +244,20 @@ class Transcription:
         # them is most of the transcription's time)
         blocks = {"defects": defect, "path": path, "path_equalities": path_equalities, "boundary": boundary,
                   "epigraph": objective}
-        jacobians = {name: ca.jacobian(e, z) for name, e in blocks.items()}
-        functions = {name: ca.Function(name, [z], [blocks[name], jacobians[name]]) for name in blocks}
-        patterns = {name: SparsityPattern(jacobian.sparsity()) for name, jacobian in jacobians.items()}
+
+        def differentiated() -> tuple[dict, dict, bool]:
+            jacobians = {name: ca.jacobian(e, z) for name, e in blocks.items()}
+            return ({name: ca.Function(name, [z], [blocks[name], jacobians[name]]) for name in blocks},
+                    {name: SparsityPattern(jacobian.sparsity()) for name, jacobian in jacobians.items()},
+                    # every map affine (linear dynamics, no nonlinear constraint): one convex program is the problem
+                    not any(ca.depends_on(jacobian, z) for jacobian in jacobians.values()))
+
+        functions, patterns, self.affine = DERIVATIVES.get("blocks", [z], list(blocks.values()), differentiated)
         self._defects, self._defect_pattern = functions["defects"], patterns["defects"]
         self._path, self._path_pattern = functions["path"], patterns["path"]
         self._path_equalities, self._path_equality_pattern = functions["path_equalities"], patterns["path_equalities"]
         self._boundary_equalities, self._boundary_pattern = functions["boundary"], patterns["boundary"]
         self._objective_epigraph, self._epigraph_pattern = functions["epigraph"], patterns["epigraph"]
-        # every map affine (linear dynamics, no nonlinear constraint): one convex program is the problem
-        self.affine = not any(ca.depends_on(jacobian, z) for jacobian in jacobians.values())
 
     def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
         """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value, as one
