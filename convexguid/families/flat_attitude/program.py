@@ -39,6 +39,7 @@ import scipy.sparse as sp
 from convexguid.dynamics.rigid_body import euler_torque
 from convexguid.families.flat_attitude.complex_step import pointwise_jacobian, pointwise_jacobians
 from convexguid.geometry import PointingCone
+from convexguid.ocp.parts import DERIVATIVES
 from convexguid.rotations import euler321_body_rates, euler321_rates_from_body, euler321_to_dcm
 from convexguid.scp.problem import (
     ConstraintBlock,
@@ -284,12 +285,18 @@ class RowHessian:
 
     def __init__(self, f, widths: tuple[int, ...], outputs: int, rows: int) -> None:
         args = [ca.SX.sym(f"a{i}", width) for i, width in enumerate(widths)]
-        values = f(*(np.array([[a[j] for j in range(a.shape[0])]], dtype=object) for a in args))
-        weights = ca.SX.sym("w", outputs)
+        values = ca.vertcat(*np.ravel(f(*(np.array([[a[j] for j in range(a.shape[0])]], dtype=object)
+                                         for a in args))))
         stacked = ca.vertcat(*args)
-        hessian = ca.hessian(ca.dot(weights, ca.vertcat(*np.ravel(values))), stacked)[0]
         self._size = stacked.shape[0]
-        self._mapped = ca.Function("row_hessian", [stacked, weights], [ca.densify(hessian)]).map(rows)
+
+        def mapped() -> ca.Function:
+            weights = ca.SX.sym("w", outputs)
+            hessian = ca.hessian(ca.dot(weights, values), stacked)[0]
+            return ca.Function("row_hessian", [stacked, weights], [ca.densify(hessian)]).map(rows)
+
+        # a slew solved again (a campaign's runs) differentiates nothing again: the process keeps the functions
+        self._mapped = DERIVATIVES.get(f"row_hessian_{rows}", [stacked], [values], mapped)
 
     def __call__(self, inputs: np.ndarray, weights: np.ndarray) -> np.ndarray:
         out = self._mapped(np.asarray(inputs, dtype=float).T, np.asarray(weights, dtype=float).T).full()
