@@ -69,15 +69,13 @@ it did not need): 29, 33, 56."""
 
 CRAWL = 2
 """Linear steps in a row that reached the trust region before the curved step takes over near feasibility. Measured:
-at 1, Cai, Zhu and Zeng's flat slew (problems/cai2018_flat_attitude.yaml) took 8 iterations and 0.35 s warm (its
-dense curved QPs), against 6 and 0.08 s; at 2 and 3 catalyst mixing, Goddard's rocket and the hang glider took the
-same 29, 33 and 56 iterations as at 1, and the flat slew its 6."""
+at 1, the flat slew (problems/cai2018_flat_attitude.yaml) took 8 iterations and 0.35 s warm, against 6 and 0.08 s;
+at 2 and 3 catalyst mixing, Goddard's rocket and the hang glider took the same 29, 33 and 56 iterations as at 1."""
 
 CURVED_SIZE = 600
 """Largest program (variables) that takes the curved step near feasibility (once pinned): its Hessian, the
-eigendecomposition and the QP are dense. Measured (the step taken from a violation of 1e-4): Betts' slew (1311
-variables) took 990 s so, against 5 s with the sparse model (the same plan, 24 iterations against 18); larger
-programs take it only at a feasible stall."""
+eigendecomposition and the QP are dense. Measured from a violation of 1e-4: Betts' slew (1311 variables) took
+990 s so, against 5 s with the sparse model (the same plan); larger programs take it only at a feasible stall."""
 
 def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION) -> tuple[np.ndarray, float]:
     """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows``, its negative eigenvalues raised to

@@ -239,8 +239,9 @@ class SCPAlgorithm:
         if self.curvature is not None and state.multipliers is not None:
             hessian = self._curvature_values(state)
         result, model = self._solve_subproblem(state, state.raw, hessian, curved)
-        if curved is not None and (result.status != "optimal" or not state.merit - model > 0):
-            # the dense curved QP was solved inaccurately, or it sees no decrease: the linear subproblem instead
+        if curved is not None and (not result.usable or not state.merit - model > 0):
+            # the curved QP failed or sees no decrease: the linear subproblem instead (an inaccurate answer is a
+            # step like any other; refused, robustness's rendezvous #75 polished on linear steps to `unverified`)
             curved = None
             result, model = self._solve_subproblem(state, state.raw, hessian)
         assembler = self.curved.assembler if curved is not None else self.assembler

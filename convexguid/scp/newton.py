@@ -11,10 +11,9 @@ equality-constrained quadratic step on that subproblem's working set:
 * inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one,
   freed by a good whole one), and the first-order one;
 * judged as every step is: the merit's ratio test, or else the funnel on the violation, whose objective ratio then
-  sizes the radius (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`). Measured on COPS' hang glider: Newton's
-  steps gained what their model predicted (1e-4 of the objective) but broke the constraints by their second-order
-  error (1e-9 to 1e-8, below the feasibility tolerance), which the merit counted as a loss; with its ratio alone
-  each such step quartered Newton's radius, 56 SCP iterations; with the funnel, 34;
+  sizes the radius (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`). On COPS' hang glider Newton's steps gained
+  what their model predicted but broke the constraints by their second-order error (1e-9 to 1e-8, feasible), a loss
+  to the merit: each refused step quartered Newton's radius, 56 SCP iterations; with the funnel, 34;
 * the merit with the penalty weight at most the one that follows the multipliers
   (:meth:`~convexguid.scp.policies.PenaltyPolicy.judging`): any weight above the multipliers makes the
   penalty exact, and a far larger one (an escalation that has served its purpose) only magnifies the

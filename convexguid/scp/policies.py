@@ -42,12 +42,10 @@ class TrustRegionPolicy:
             return min(2.0 * radius, self.maximum)
         return radius
 
-    def after_failure(self, radius: float) -> float:
-        """A smaller, better-conditioned subproblem after the backend failed numerically."""
+    def after_failure(self, radius: float) -> float:  # a smaller, better-conditioned subproblem
         return max(0.25 * radius, self.minimum)
 
-    def after_penalty_change(self, radius: float) -> float:
-        """Room to move again once the merit function has changed."""
+    def after_penalty_change(self, radius: float) -> float:  # room to move once the merit function has changed
         return max(radius, self.initial)
 
     def collapsed(self, radius: float) -> bool:
