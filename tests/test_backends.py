@@ -157,6 +157,28 @@ def test_daqp_warm_start_follows_updates():
         assert res.status == "optimal" and res.objective == pytest.approx(ref.objective, rel=1e-8, abs=1e-8)
 
 
+def test_daqp_solves_again_at_the_looser_tolerance_what_it_calls_infeasible_at_the_tight_one(monkeypatch):
+    """A DAQP "infeasible" at primal tolerance 1e-9 (numerical: the SCP's subproblems always admit d = 0) is solved
+    again at 1e-8, and that answer, graded against the backend's tolerance, is Clarabel's."""
+    import daqp
+
+    from convexguid.backends.dense import PRIMAL_TOLERANCES
+
+    real, tolerances = daqp.solve, []
+
+    def tight_says_infeasible(*args, primal_tol, **kwargs):
+        tolerances.append(primal_tol)
+        answer = real(*args, primal_tol=primal_tol, **kwargs)
+        return (answer[0], answer[1], -1, answer[3]) if primal_tol == PRIMAL_TOLERANCES[0] else answer
+
+    monkeypatch.setattr(daqp, "solve", tight_says_infeasible)
+    program = penalized_qp(0)
+    res = make_backend("daqp", program, tolerance=1e-9).solve()
+    ref = make_backend("clarabel", program, tolerance=1e-10).solve()
+    assert res.status == "optimal" and res.objective == pytest.approx(ref.objective, rel=1e-8, abs=1e-8)
+    assert tolerances[:2] == list(PRIMAL_TOLERANCES)
+
+
 def test_daqp_reports_infeasible_and_refuses_cones():
     prog = small_qp()
     prog.A = sp.csc_matrix(np.array([[1.0, 1.0], [-1.0, -1.0]]))

@@ -141,7 +141,8 @@ class SecondOrderModels:
     def __init__(self, program: NonconvexProgram, linear: LinearConstraints, scale: np.ndarray, weights: np.ndarray,
                  cost: np.ndarray, outputs: OutputConstraints) -> None:
         self.hessian = program.lagrangian_hessian
-        self.linear = linear
+        # CSR once: every model reads rows of A and G (a program's COO pattern would be converted each time)
+        self.linear = replace(linear, A=_csr(linear.A), G=_csr(linear.G))
         self.scale, self.weights, self.cost, self.outputs = scale, weights, cost, outputs
 
     def gauss_newton(self, raw: Evaluation) -> np.ndarray:
@@ -204,3 +205,8 @@ def linearized_violation(raw: Evaluation, outputs: OutputConstraints, d: np.ndar
     for cone in raw.cones:  # affine: its value after the step is exact
         total += float(cone.violations(cone.values + cone.jacobian @ d).sum())
     return total
+
+
+def _csr(matrix):
+    """``matrix`` as CSR if it is sparse, as it is if dense."""
+    return sp.csr_matrix(matrix) if sp.issparse(matrix) else matrix
