@@ -228,3 +228,48 @@ def test_fallback_answers_when_the_primary_is_not_optimal():
     backend.update(small_qp(shift=0.5))
     np.testing.assert_allclose(backend.solve().x, [0.25, 1.25], atol=1e-6)
     assert backend.fallbacks == 2
+
+
+def _alp_rider_first_subproblem():
+    """The first SCP subproblem of Betts' alp rider on 4 intervals (a quadrature cost of magnitude 4e4 weighted 30
+    times: slack costs of 1e6), an LP bounded by its trust region."""
+    import casadi as ca
+
+    from convexguid.ocp import Problem
+    from convexguid.ocp.solve import _settings, transcribe
+    from convexguid.scp.engine import SCPAlgorithm
+
+    p = Problem("alp-rider")
+    ys = [p.state(f"y{i + 1}", initial=a, final=b) for i, (a, b) in enumerate([(2, 2), (1, 3), (2, 1), (1, -2)])]
+    cost = p.state("J", initial=0.0)
+    u1, u2 = p.control("u1"), p.control("u2")
+    y1, y2, y3, y4 = ys
+    square = y1**2 + y2**2 + y3**2 + y4**2
+    p.dynamics({y1: -10 * y1 + u1 + u2, y2: -2 * y2 + u1 + 2 * u2, y3: -3 * y3 + 5 * y4 + u1 - u2,
+                y4: 5 * y3 - 3 * y4 + u1 + 3 * u2, cost: 100 * square + 0.01 * (u1**2 + u2**2)})
+    p.path_constraint("terrain", 3 * ca.exp(-12 * (p.time - 3) ** 2) + 0.01 - square)
+    p.final_time(fixed=20.0)
+    p.minimize_terminal(cost)
+    p.transcription(4)
+    program = transcribe(p)
+    algorithm = SCPAlgorithm(program, _settings(["terminal"], 10))
+    state = algorithm.initialize()
+    return algorithm.assembler.build(state.x, state.raw, state.radius, state.penalty, None)
+
+
+def test_clarabel_checks_an_unbounded_verdict_again_at_unit_objective_scale():
+    """Clarabel 0.11 calls this bounded LP dual infeasible at its first iteration (its ray test is not invariant to
+    the objective's scale); the backend solves it again with the objective divided by its largest coefficient and
+    returns the optimum HiGHS finds, with multipliers on the program's own scale (strong duality holds)."""
+    from scipy.optimize import linprog
+
+    program = _alp_rider_first_subproblem()
+    assert np.max(np.abs(program.q)) > 1e5 and not np.any(program.P.data)  # an LP
+    result = make_backend("clarabel", program, tolerance=1e-8).solve()
+    assert result.status == "optimal"
+    nz, A = program.cones.zero, program.A.tocsr()
+    highs = linprog(program.q, A_ub=A[nz:], b_ub=program.b[nz:], A_eq=A[:nz], b_eq=program.b[:nz],
+                    bounds=(None, None), method="highs")
+    assert highs.status == 0
+    assert program.objective(result.x) == pytest.approx(highs.fun, rel=1e-6)
+    assert -program.b @ result.z == pytest.approx(highs.fun, rel=1e-6)  # the dual objective, unscaled

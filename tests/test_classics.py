@@ -53,6 +53,36 @@ def test_the_hang_glider_reaches_cops_range_from_its_flown_first_guess():
     assert solution.iterations <= 2 * answer.iterations
 
 
+def test_a_chattering_collocation_optimum_is_caught_and_regularized():
+    """COPS' hanging chain with the default quadratic control: the collocation's optimum zigzags where the chain is
+    steep (IPOPT on it stops at E = 4.98, below the true minimum); the dense check fails it, and the repair holds the
+    slope linear between node values on the same grid. Converged, verified, at COPS' energy."""
+    module = _module("hanging_chain")
+    solution = module.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert float(solution.nodes.columns["E"][-1]) == pytest.approx(module.PUBLISHED, rel=1e-4)
+    repairs = [r.repair for r in solution.repair_rounds]
+    assert any(r.startswith("the controls held linear between node values on the same grid") for r in repairs)
+
+
+def test_the_linear_control_program_carries_the_plans_nodes():
+    """``with_linear_control``: the same grid, node states, node controls and final time; the midpoint values
+    become the nodes' means; a fixed-grid problem keeps its statement's other settings."""
+    module = _module("hanging_chain")
+    program = transcribe(module.build(6))
+    z = program.initial_guess() + np.linspace(0.0, 0.3, program.num_variables)
+    linear, start = program.with_linear_control(z)
+    assert linear.linear_control and not program.linear_control and linear.N == program.N
+    assert program.problem.control_interpolation == "quadratic"  # the user's statement is untouched
+    np.testing.assert_array_equal(linear.states(start), program.states(z))
+    np.testing.assert_array_equal(linear.node_controls(start), program.node_controls(z))
+    nodes = program.node_controls(z)
+    np.testing.assert_allclose(linear.midpoint_controls(start), 0.5 * (nodes[:-1] + nodes[1:]))
+    assert linear.final_time(start) == program.final_time(z)
+    _, fresh = program.with_linear_control(z, carry=False)  # a plan whose flight missed its end by far
+    np.testing.assert_array_equal(fresh, linear.initial_guess())
+
+
 def test_a_nonlinear_final_condition_is_met_by_the_flown_plan():
     """Orbit raising ends on a circular orbit, v = sqrt(1 / r): an equality of the final state the engine linearizes;
     the dense check evaluates it on the re-propagated state."""

@@ -96,6 +96,27 @@ def test_minimum_energy_rest_to_rest_is_the_closed_form():
     assert np.allclose(solution.nodes.columns["u"], 6 - 12 * t, atol=1e-6)
 
 
+@pytest.mark.parametrize("weight, expected", [(0.0, math.tanh(1.0)), (1.0, 1.0), (3.0, (3 + math.tanh(1.0))
+                                                                                   / (1 + 3 * math.tanh(1.0)))])
+def test_an_integral_cost_with_a_terminal_one_is_the_riccati_value(weight, expected):
+    """x' = u from x(0) = 1, x(1) free, minimise S x(1)^2 + integral of x^2 + u^2: the Riccati equation
+    p' = p^2 - 1, p(1) = S, gives J = p(0) x(0)^2 = (S + tanh 1) / (1 + S tanh 1) (tanh 1 without the terminal
+    cost, exactly 1 at S = 1). The integral is a state, shown in the tables."""
+    p = Problem("lq")
+    x = p.state("x", initial=1.0)
+    u = p.control("u")
+    p.dynamics({x: u})
+    p.final_time(fixed=1.0)
+    cost = p.minimize_integral(x**2 + u**2, terminal=weight * x**2)
+    p.transcription(20)
+    solution = p.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert solution.objective == pytest.approx(expected, rel=1e-6)
+    assert str(cost) == "cost" and abs(solution.nodes.columns["cost"][0]) < 1e-12
+    assert solution.nodes.columns["cost"][-1] + weight * solution.nodes.columns["x"][-1] ** 2 == \
+        pytest.approx(expected, rel=1e-6)
+
+
 def _keep_out() -> Problem:
     p = Problem("keep-out")
     px = p.state("px", initial=0.0, final=10.0)

@@ -25,6 +25,7 @@ CasADi expressions, bit for bit).
 
 from __future__ import annotations
 
+import copy
 from functools import cached_property
 
 import numpy as np
@@ -238,6 +239,20 @@ class HermiteSimpsonProgram(Transcription):
         controls = np.vstack([*nodes, U[-1:]])
         values = controls if self.linear_control else np.vstack([controls, *mids])
         return fine, fine.assemble(states, values, tf)
+
+    def with_linear_control(self, z: np.ndarray, carry: bool = True) -> tuple[HermiteSimpsonProgram, np.ndarray]:
+        """The same grid with each control linear between its node values (``control="linear"``: the midpoint
+        values tied to the nodes' mean), margins afresh: the regularization of an optimum that chatters between node
+        and midpoint values. Its start: ``z`` carried onto it (node states and controls, final time) when
+        ``carry``, else its own first guess."""
+        problem = copy.copy(self.problem)
+        problem.control_interpolation = "linear"
+        linear = HermiteSimpsonProgram(problem, grid=self.uneven_shares, intervals=self.N)
+        linear.split_from = self.split_from
+        if not carry:
+            return linear, linear.initial_guess()
+        z = self.unwrapped(z)
+        return linear, linear.assemble(self.states(z), self.node_controls(z), self.final_time(z))
 
 
 def hermite_cubic(x0: np.ndarray, x1: np.ndarray, dx0: np.ndarray, dx1: np.ndarray, s: np.ndarray) -> np.ndarray:

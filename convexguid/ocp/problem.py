@@ -345,6 +345,21 @@ class Problem:
                             f"{expression.shape})")
         self.objective, self.terminal = "terminal", expression
 
+    def minimize_integral(self, integrand, terminal=0.0, name: str = "cost") -> ca.SX:
+        """Minimise the integral over the maneuver of ``integrand`` (of states, controls and :attr:`time`: a Lagrange
+        cost), plus ``terminal``, a function of the final state and time as in :meth:`minimize_terminal` (a Bolza
+        cost). The integral is carried as a state ``name`` that starts at 0 with the integrand as its rate, so every
+        transcription integrates it as it integrates the dynamics, the dense check re-propagates it with them, and
+        the tables show it accumulate. Returns its symbol."""
+        where = f"{self.name}: minimize_integral"
+        integrand = ca.SX(integrand)
+        if integrand.shape != (1, 1):
+            raise SpecError(f"{where}: integrand: expected a scalar expression (got shape {integrand.shape})")
+        cost = self.state(name, initial=0.0)
+        self.rates[name] = integrand
+        self.minimize_terminal(cost + terminal)
+        return cost
+
     def transcription(self, intervals: int, method: str = "hermite-simpson", substeps: int = 4,
                       control: str = "quadratic") -> None:
         """``intervals`` equal intervals, transcribed by ``method``: ``"hermite-simpson"`` (collocation, the control
@@ -389,7 +404,8 @@ class Problem:
                                 "time (the flow starts afresh at every node)")
         if self.objective is None and self.phase_of is None:
             raise SpecError(f"{self.name}: objective: not stated; call problem.minimize_time(), "
-                            "problem.minimize_energy(), problem.minimize_fuel() or problem.minimize_terminal(...)")
+                            "problem.minimize_energy(), problem.minimize_fuel(), problem.minimize_terminal(...) or "
+                            "problem.minimize_integral(...)")
         if self.objective == "time" and self.tf_bounds is None:
             raise SpecError(f"{self.name}: minimize_time: the final time is fixed; give final_time(bounds=...)")
         if self.objective == "energy" and self.tf is None:
