@@ -30,6 +30,7 @@ from convexguid.errors import SpecError
 from convexguid.ocp import Problem
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.reference import solve_with_ipopt
+from convexguid.ocp.solve import transcribe
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -115,6 +116,32 @@ def test_an_integral_cost_with_a_terminal_one_is_the_riccati_value(weight, expec
     assert str(cost) == "cost" and abs(solution.nodes.columns["cost"][0]) < 1e-12
     assert solution.nodes.columns["cost"][-1] + weight * solution.nodes.columns["x"][-1] ** 2 == \
         pytest.approx(expected, rel=1e-6)
+
+
+def test_a_thrust_cone_holds_between_the_nodes_of_a_quadratic_control():
+    """A minimum-time turn with the thrust's magnitude a cone: Hermite-Simpson's quadratic through node, midpoint
+    and node values inside the cone may leave it between them, so a cone on the controls alone is held at the
+    midpoints and at the six samples where the bounds are (it was at the nodes only: a CW minimum-time transfer's
+    flown thrust then left the cone by 43% and the repair tightened it past its own bound). The flown thrust stays
+    within the cone; the time is IPOPT's on the same transcription."""
+    p = Problem("turn")
+    x, y = p.state("x", initial=0.0, final=1.0), p.state("y", initial=0.0, final=0.0)
+    vx, vy = p.state("vx", initial=0.0, final=0.0), p.state("vy", initial=1.0, final=0.0)
+    ux, uy = p.control("ux", bounds=(-1.0, 1.0)), p.control("uy", bounds=(-1.0, 1.0))
+    p.dynamics({x: vx, y: vy, vx: ux, vy: uy})
+    p.cone_constraint("thrust", [ux, uy], 1.0)
+    p.final_time(bounds=(0.5, 10.0), guess=3.0)
+    p.minimize_time()
+    p.transcription(12)
+    program = transcribe(p)
+    assert {point for point, _, _ in program.cone_rows} == {"node", "mid", "sample"}
+    solution = p.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    flown = np.hypot(solution.dense.columns["ux"], solution.dense.columns["uy"])
+    assert flown.max() <= 1.0 + 1e-6
+    answer = solve_with_ipopt(program)
+    assert answer.success and solution.figures.final_time_s == pytest.approx(answer.objective, rel=1e-4)  # a repair
+    # tightened the cone by its excess between the samples (2e-5 longer)
 
 
 def _keep_out() -> Problem:
@@ -338,7 +365,6 @@ def test_a_statement_of_the_same_graph_reuses_its_derivatives_and_another_does_n
     """The derivative cache (convexguid.ocp.parts.DERIVATIVES) hands a statement built again the same CasADi
     functions, and a statement whose maps differ by one constant its own; it keeps only its last few graphs."""
     from convexguid.ocp.parts import DerivativeCache
-    from convexguid.ocp.solve import transcribe
 
     def brachistochrone(g: float):
         example = _example("brachistochrone")

@@ -156,7 +156,8 @@ class DenseChecker:
                     stated_cone = p.constraints[index].cone is not None
                     table, target = (program.cone_rows, cone) if stated_cone else (program.path_rows, path)
                     rows = [r for r, (point, i, j) in enumerate(table) if j == index and (
-                        (point == "mid" and i == k) or (point == "node" and i in (k, k + 1) and not pinned.get(i)))]
+                        (point in ("mid", "sample") and i == k) or (point == "node" and i in (k, k + 1)
+                                                                   and not pinned.get(i)))]
                     target[rows] += margin
                 else:
                     state, upper = index

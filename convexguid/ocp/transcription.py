@@ -217,6 +217,10 @@ class Transcription:
         constraints, cones, equalities = [], [], []
         cone_maps = {j: ca.Function(f"cone_{j}", [x, u], [ca.vertcat(*c.cone)]) for j, c in enumerate(p.constraints)
                      if c.cone is not None}
+        # a cone on the controls alone is affine in the control values wherever they are interpolated: held there too
+        # when the interpolant is curved (a quadratic through two values inside a cone may leave it between them)
+        control_cones = {j for j, c in enumerate(p.constraints) if c.cone is not None and self.INTERPOLATION_SAMPLES
+                         and not ca.depends_on(ca.vertcat(*c.cone), x)}
 
         def imposed(kind: str, k: int, share: float, state, control, time) -> None:
             for j, c in enumerate(p.constraints):
@@ -228,11 +232,19 @@ class Transcription:
                 elif c.cone is None:
                     self.path_rows.append((kind, k, j))
                     constraints.append(g[j](state, control, time))
-                elif kind == "node":  # a cone is affine in the node's values only
+                elif kind == "node" or j in control_cones:  # a cone is affine in the node's values only
                     self.cone_rows.append((kind, k, j))
                     cones.append(cone_maps[j](state, control))
 
         defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
+        for k, share, j in ((k, share, j) for k in range(N) for share in self.INTERPOLATION_SAMPLES
+                            for j in sorted(control_cones)):
+            if p.constraints[j].applies(float(self.node_shares()[k]), False):
+                sampled = [sum(weight * z[column] for column, weight in zip(
+                    self.interval_control_columns(k, i), self.interval_weights(share), strict=True))
+                    for i in range(self.nu)]
+                self.cone_rows.append(("sample", k, j))
+                cones.append(cone_maps[j](ca.SX.zeros(self.nx), ca.vertcat(*sampled)))
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         path_equalities = ca.vertcat(*equalities) if equalities else ca.SX(0, 1)
         boundary, self.boundary_equality_rows = nonlinear_equalities(self, X, tf)
