@@ -144,6 +144,24 @@ def test_a_thrust_cone_holds_between_the_nodes_of_a_quadratic_control():
     # tightened the cone by its excess between the samples (2e-5 longer)
 
 
+@pytest.mark.parametrize("rate", [2.0, -0.2])
+def test_a_plan_on_unstable_dynamics_is_judged_interval_by_interval_and_says_so(rate):
+    """x' = a x + u from 1 to 0 in 20 s at least energy. With a = 2 the flight from the initial state amplifies the
+    plan's local errors by e^40 and no grid can pass it; the check then flies each interval from its node and the
+    message says so. With a = -0.2 the plan is judged on the flight from the initial state, as every plan is."""
+    p = Problem("scalar")
+    x = p.state("x", initial=1.0, final=0.0)
+    u = p.control("u")
+    p.dynamics({x: rate * x + u})
+    p.final_time(fixed=20.0)
+    p.minimize_energy()
+    p.transcription(20)
+    solution = p.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    amplified = "flown interval by interval from the plan's nodes" in solution.message
+    assert amplified == (rate > 0)
+
+
 def _keep_out() -> Problem:
     p = Problem("keep-out")
     px = p.state("px", initial=0.0, final=10.0)

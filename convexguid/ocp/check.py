@@ -22,7 +22,15 @@ from scipy.integrate import solve_ivp
 
 from convexguid.ocp.boundary import boundary_errors
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
-from convexguid.ocp.mesh import JUMP_SHARE, control_jumps, held_control, plan_refinement, refined_program
+from convexguid.ocp.mesh import (
+    JUMP_SHARE,
+    control_jumps,
+    held_control,
+    interval_errors,
+    interval_flows,
+    plan_refinement,
+    refined_program,
+)
 from convexguid.ocp.parts import Margins, NumericFunction
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
@@ -43,6 +51,11 @@ MARGIN_FLOOR = 1e-6
 
 MAX_INTERVALS = 400
 """A refinement makes at most this many intervals (the transcription's error, not the constraints, is the cause)."""
+
+AMPLIFIED = 1e3
+"""A flight from the initial state that misses the final state by more than this many times the sum of the
+intervals' local errors shows dynamics that amplify errors: the plan is judged interval by interval instead
+(:meth:`DenseChecker.flown`)."""
 
 CARRIED_FINAL_ERROR = 0.1
 """A chattering plan is carried onto its regularized program (controls linear between nodes) when its flight misses
@@ -99,9 +112,51 @@ class DenseChecker:
         t = np.concatenate(times)
         return DenseTrack(t, np.vstack(states), np.array([u(s) for s in t]).reshape(t.size, program.nu))
 
+    def propagate_from_nodes(self, program: Transcription, z: np.ndarray) -> DenseTrack:
+        """The plan flown interval by interval, each interval from its own planned start node
+        (:func:`~convexguid.ocp.mesh.interval_flows`), sampled on the same grid as :meth:`propagate`."""
+        u = self.control(program, z)
+        node_times = program.final_time(z) * program.node_shares()
+        times, states = [], []
+        for k, flow in enumerate(interval_flows(program, z, u)):
+            grid = np.linspace(node_times[k], node_times[k + 1], self.points + 1)[0 if k == 0 else 1:]
+            times.append(grid)
+            states.append(flow.sol(grid).T)
+        t = np.concatenate(times)
+        return DenseTrack(t, np.vstack(states), np.array([u(s) for s in t]).reshape(t.size, program.nu))
+
+    def flown(self, program: Transcription, z: np.ndarray) -> tuple[DenseTrack, tuple[str, ...]]:
+        """The track the plan is judged on, and a remark when it is not the flight from the initial state.
+
+        The plan is flown from its initial state. If that flight misses the final state by more than
+        :data:`AMPLIFIED` times the sum of the intervals' local errors (each interval flown from its own node),
+        the miss is the dynamics' amplification of errors no grid removes (an unstable mode: Betts' alp rider grows
+        as :math:`e^{2t}`, :math:`e^{40}` over its horizon, so its IPOPT optimum flown open loop misses by 1e14
+        scales); the plan is then judged on the flight interval by interval from its nodes (Betts 2010, Sec. 4.7),
+        and the remark says so."""
+        track = self.propagate(program, z)
+        miss = max(self._final_errors(program, track).values(), default=0.0)
+        if not miss > FINAL_TOLERANCE:
+            return track, ()
+        local = float(np.sum(interval_errors(program, z)))
+        if not miss > AMPLIFIED * local:
+            return track, ()
+        return self.propagate_from_nodes(program, z), (
+            f"flown interval by interval from the plan's nodes: from the initial state the open-loop flight misses "
+            f"the final state by {miss:.3g} of the scales, {miss / max(local, 1e-300):.3g} times the sum of the "
+            "intervals' local errors (the dynamics amplify them)",)
+
+    @staticmethod
+    def _final_errors(program: Transcription, track: DenseTrack) -> dict[str, float]:
+        """Each stated final value's error on the track's last state (in its scale), and each nonlinear boundary
+        condition's."""
+        errors = {f"final_{v.name}_error": abs(float(track.x[-1, i]) - v.final) / program.state_scales[i]
+                  for i, v in enumerate(program.problem.states) if v.final is not None}
+        return errors | boundary_errors(program, track.x, float(track.t[-1]))
+
     def check(self, program: Transcription, z: np.ndarray) -> Check:
         p = program.problem
-        track = self.propagate(program, z)
+        track, flight = self.flown(program, z)
         excess = self._excess(program, track)
         broken = any(np.any(e > self._tolerance(p, key)) for key, e in excess.items())
         checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()), 0.0, "max")
@@ -111,15 +166,13 @@ class DenseChecker:
                 checks.append(ConstraintCheck(f"{v.name}_max", float(track.x[:, i].max()), v.upper, "max"))
             if v.lower is not None:
                 checks.append(ConstraintCheck(f"{v.name}_min", float(track.x[:, i].min()), v.lower, "min"))
-        final_errors = {f"final_{v.name}_error": abs(float(track.x[-1, i]) - v.final) / program.state_scales[i]
-                        for i, v in enumerate(p.states) if v.final is not None}
-        final_errors |= boundary_errors(program, track.x, float(track.t[-1]))
+        final_errors = self._final_errors(program, track)
         worst_final = max(final_errors.values(), default=0.0)
         passed = worst_final <= FINAL_TOLERANCE and not broken
         verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed,
                                     {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE,
                                      "path_equality": EQUALITY_TOLERANCE},
-                                    () if passed else jumping_controls(program, z))
+                                    flight + (() if passed else jumping_controls(program, z)))
         return Check(verification, track)
 
     def repair(self, program: Transcription, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
@@ -133,8 +186,10 @@ class DenseChecker:
         excess_by_name = self._excess(program, track)
         worst_now = max((float(e.max()) for key, e in excess_by_name.items()
                          if self._tolerance(p, key) == PATH_TOLERANCE), default=0.0)
-        if worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation:
-            # nothing broken between nodes, or the last tightening did not reduce it: the grid is too coarse
+        if (worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation
+                or check.verification.final_state_error > FINAL_TOLERANCE):
+            # nothing broken between nodes, the last tightening did not reduce it, or the flight misses the final
+            # state (no margin mends that): the grid is too coarse (a refinement also splits where it broke)
             return self.refine(program, z, check)
         N = program.N
         node_times = program.final_time(z) * program.node_shares()

@@ -13,11 +13,13 @@ points, a finer mesh) with the plan carried over as its start, or ``None`` when 
 to offer. Every round is recorded (:class:`RepairRound`), so the summary shows what was repaired
 and the figures after it.
 
-Statuses: ``converged`` only when the dense check passed; ``unverified`` when the SCP converged
-but the check still fails when the budget runs out or no repair is left, naming the worst
-violations, or when a repaired program (tightened, refined) ends ``infeasible``: that certificate is of the
-repair, not of the problem as stated, and the message names the repair; otherwise the SCP's own status
-(``infeasible`` with its certificate, ``max_iterations``, ``solver_error``).
+Statuses: ``converged`` only when the SCP converged and the dense check passed; ``unverified`` when the SCP
+converged (or stopped feasible without proving optimality, itself ``unverified``) but the check still fails when
+the budget runs out or no repair is left, naming the worst violations, or when a repaired program (tightened,
+refined) ends ``infeasible``: that certificate is of the repair, not of the problem as stated, and the message names
+the repair; otherwise the SCP's own status (``infeasible`` with its certificate, ``max_iterations``,
+``solver_error``). A feasible plan not proved optimal is repaired as a converged one is when its check fails (the
+grid may be what keeps the SCP from its KKT point), and stays ``unverified`` when its check passes.
 """
 
 from __future__ import annotations
@@ -148,12 +150,15 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
             return VerifiedSolve(program, result, check, "unverified",
                                  f"after the repair '{what}' the SCP found no feasible point ({result.message}); "
                                  "the problem as stated is not proved infeasible", rounds)
-        if result.status != "converged":
+        if result.status not in ("converged", "unverified"):
             # infeasible, max_iterations, solver_error: the check of the last iterate is reported, not repaired
             return VerifiedSolve(program, result, check, result.status, result.message, rounds)
+        if v.passed and result.status == "unverified":  # a feasible plan not proved optimal: nothing to repair
+            return VerifiedSolve(program, result, check, "unverified", result.message, rounds)
         if v.passed:
             rounds_text = f"{attempt} repair round{'s' if attempt > 1 else ''}"
             message = result.message if attempt == 0 else f"{result.message}; verified after {rounds_text}"
+            message = "; ".join([message, *v.remarks])  # how the plan was judged, when not as usual
             return VerifiedSolve(program, result, check, "converged", message, rounds)
         repair = checker.repair(program, result.x, check, attempt) if attempt < budget else None
         if repair is None:
