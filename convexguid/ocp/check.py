@@ -109,19 +109,20 @@ class DenseChecker:
             times.append(run.t[keep])
             states.append(run.y.T[keep])
             state = run.y[:, -1]
-        t = np.concatenate(times)
-        return DenseTrack(t, np.vstack(states), np.array([u(s) for s in t]).reshape(t.size, program.nu))
+        return self._track(program, u, times, states)
 
-    def propagate_from_nodes(self, program: Transcription, z: np.ndarray) -> DenseTrack:
-        """The plan flown interval by interval, each interval from its own planned start node
-        (:func:`~convexguid.ocp.mesh.interval_flows`), sampled on the same grid as :meth:`propagate`."""
-        u = self.control(program, z)
+    def propagate_from_nodes(self, program: Transcription, z: np.ndarray, flows: list) -> DenseTrack:
+        """The plan flown interval by interval, each interval from its own planned start node (``flows``, from
+        :func:`~convexguid.ocp.mesh.interval_flows`), sampled on the same grid as :meth:`propagate`."""
         node_times = program.final_time(z) * program.node_shares()
-        times, states = [], []
-        for k, flow in enumerate(interval_flows(program, z, u)):
-            grid = np.linspace(node_times[k], node_times[k + 1], self.points + 1)[0 if k == 0 else 1:]
-            times.append(grid)
-            states.append(flow.sol(grid).T)
+        grids = [np.linspace(node_times[k], node_times[k + 1], self.points + 1)[0 if k == 0 else 1:]
+                 for k in range(program.N)]
+        return self._track(program, self.control(program, z), grids,
+                           [flow.sol(grid).T for flow, grid in zip(flows, grids, strict=True)])
+
+    @staticmethod
+    def _track(program: Transcription, u, times: list[np.ndarray], states: list[np.ndarray]) -> DenseTrack:
+        """The pieces of a flight, one after the other, with the control ``u`` at their instants."""
         t = np.concatenate(times)
         return DenseTrack(t, np.vstack(states), np.array([u(s) for s in t]).reshape(t.size, program.nu))
 
@@ -138,10 +139,11 @@ class DenseChecker:
         miss = max(self._final_errors(program, track).values(), default=0.0)
         if not miss > FINAL_TOLERANCE:
             return track, ()
-        local = float(np.sum(interval_errors(program, z)))
+        flows = interval_flows(program, z, self.control(program, z))
+        local = float(np.sum(interval_errors(program, z, flows)))
         if not miss > AMPLIFIED * local:
             return track, ()
-        return self.propagate_from_nodes(program, z), (
+        return self.propagate_from_nodes(program, z, flows), (
             f"flown interval by interval from the plan's nodes: from the initial state the open-loop flight misses "
             f"the final state by {miss:.3g} of the scales, {miss / max(local, 1e-300):.3g} times the sum of the "
             "intervals' local errors (the dynamics amplify them)",)
@@ -234,8 +236,8 @@ class DenseChecker:
         the constraints the dense check broke, a chattering control); the other transcriptions double every
         interval."""
         if isinstance(program, HermiteSimpsonProgram):
-            jumps = int(control_jumps(program, z)[1].sum())
-            if not program.linear_control and jumps:
+            jumps = 0 if program.linear_control else int(control_jumps(program, z)[1].sum())
+            if jumps:
                 # a plan whose flight misses its final state by a large share of the scales has the chatter's states,
                 # not the dynamics': the regularized program starts from its own first guess instead
                 carry = check.verification.final_state_error <= CARRIED_FINAL_ERROR

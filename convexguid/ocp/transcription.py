@@ -232,19 +232,21 @@ class Transcription:
                 elif c.cone is None:
                     self.path_rows.append((kind, k, j))
                     constraints.append(g[j](state, control, time))
-                elif kind == "node" or j in control_cones:  # a cone is affine in the node's values only
+                elif kind == "node" or j in control_cones:  # affine in a node's values (a midpoint state is not)
                     self.cone_rows.append((kind, k, j))
                     cones.append(cone_maps[j](state, control))
 
         defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
-        for k, share, j in ((k, share, j) for k in range(N) for share in self.INTERPOLATION_SAMPLES
-                            for j in sorted(control_cones)):
-            if p.constraints[j].applies(float(self.node_shares()[k]), False):
-                sampled = [sum(weight * z[column] for column, weight in zip(
+        shares = self.node_shares()
+        for k in range(N):
+            applying = [j for j in sorted(control_cones) if p.constraints[j].applies(float(shares[k]), False)]
+            for share in self.INTERPOLATION_SAMPLES if applying else ():
+                sampled = ca.vertcat(*(sum(weight * z[column] for column, weight in zip(
                     self.interval_control_columns(k, i), self.interval_weights(share), strict=True))
-                    for i in range(self.nu)]
-                self.cone_rows.append(("sample", k, j))
-                cones.append(cone_maps[j](ca.SX.zeros(self.nx), ca.vertcat(*sampled)))
+                    for i in range(self.nu)))
+                for j in applying:
+                    self.cone_rows.append(("sample", k, j))
+                    cones.append(cone_maps[j](ca.SX.zeros(self.nx), sampled))
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         path_equalities = ca.vertcat(*equalities) if equalities else ca.SX(0, 1)
         boundary, self.boundary_equality_rows = nonlinear_equalities(self, X, tf)
