@@ -142,6 +142,23 @@ def test_the_funnel_takes_an_objective_step_inside_it_and_refuses_one_outside():
     assert funnel.narrowed(10.0, 1.0, 0.5) == pytest.approx(5.0)
 
 
+def test_the_funnel_refuses_a_step_back_to_a_point_its_h_step_left():
+    """The merit and the funnel must not take turns between two points (the tumor problem's 280-iteration cycle):
+    the numbers are that cycle's, violation 1.857e-7 <-> 1.084e-7, objective 7571.4192 <-> 7571.434."""
+    policy = FunnelPolicy()
+    funnel = policy.initial(1e-3)
+    low, high, f_low, f_high = 1.084e-7, 1.857e-7, 7571.434, 7571.4192
+    # the merit refuses (ratio -1.1), the funnel takes it as an h-step: the violation fell as predicted
+    accepted, ratio, funnel = policy.decide(funnel, False, -1.1, high, low, f_high, f_high - f_low, 5.5e-5, 1.856e-7)
+    assert accepted and ratio == pytest.approx(0.4165, abs=1e-4) and funnel.left == ((high, f_high),)
+    # the merit would take the step back (its ratio 0.31): it returns to the point left, so it is refused
+    accepted, ratio, after = policy.decide(funnel, True, 0.31, low, high, f_low, f_low - f_high, 2.9e-2, 1.083e-7)
+    assert not accepted and ratio <= 0 and after == funnel
+    # a step that lowers the objective below that point's is taken
+    accepted, ratio, _ = policy.decide(funnel, True, 0.31, low, high, f_low, f_low - (f_high - 0.01), 2.9e-2, 1e-7)
+    assert accepted and ratio == 0.31
+
+
 class _Point:
     """min (x - 0.7)^2 subject to lower <= x <= upper (hard linear rows): infeasible when lower > upper."""
 

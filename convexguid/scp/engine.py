@@ -66,7 +66,7 @@ from convexguid.scp.merit import (
 )
 from convexguid.scp.newton import Candidate, newton_candidate
 from convexguid.scp.optimality import certified_by_least_squares, certified_here, finish_optimal, kkt_met, measure_kkt
-from convexguid.scp.policies import FunnelPolicy, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
+from convexguid.scp.policies import Funnel, FunnelPolicy, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import CurvatureModel, Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import restore_start, run_phase1
 from convexguid.scp.state import IterationRecord, IterationState, SCPResult, merge_results
@@ -316,15 +316,15 @@ class SCPAlgorithm:
         return self._check_limit(state)
 
     def judged(self, state: IterationState, ratio: float, x_new: np.ndarray, ev_new: Evaluation,
-               predicted_objective: float, linearized: float) -> tuple[bool, float, float | None]:
-        """``(accepted, ratio, funnel width)`` of a trial point: the merit's ratio test, or else the funnel, whose
+               predicted_objective: float, linearized: float) -> tuple[bool, float, Funnel | None]:
+        """``(accepted, ratio, funnel)`` of a trial point: the merit's ratio test, or else the funnel, whose
         ratio then updates the radius (:class:`~convexguid.scp.policies.FunnelPolicy`); ``linearized`` is the
         violation the step's linearization predicted, ``predicted_objective`` the objective's predicted decrease."""
         accepted = ratio >= self.settings.accept_ratio
         if state.funnel is None or self.phase1:
             return accepted, ratio, state.funnel
         violation = penalty_sum(state.ev)
-        return self.funnel.decide(state.funnel, accepted, ratio, violation, penalty_sum(ev_new),
+        return self.funnel.decide(state.funnel, accepted, ratio, violation, penalty_sum(ev_new), state.objective,
                                   state.objective - self.objective(ev_new, x_new), predicted_objective,
                                   violation - linearized)
 

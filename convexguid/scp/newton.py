@@ -40,6 +40,7 @@ from convexguid.scp.problem import Evaluation
 
 if TYPE_CHECKING:
     from convexguid.scp.engine import SCPAlgorithm
+    from convexguid.scp.policies import Funnel
     from convexguid.scp.state import IterationState
 
 BOUND_ROUNDS = 2
@@ -60,8 +61,8 @@ class Candidate:
     whole: bool
     """Newton's step as solved (not shortened by a trust region or a bound): a small one means convergence."""
     accepted: bool
-    funnel: float | None
-    """The funnel's width after the step (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`)."""
+    funnel: Funnel | None
+    """The funnel after the step (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`)."""
     model: LocalModel | None = None
     newton: NewtonStep | None = None
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from convexguid.scp.kkt import KKTResiduals
 from convexguid.scp.lagrangian import Multipliers, WorkingSet
+from convexguid.scp.policies import Funnel
 from convexguid.scp.problem import Evaluation
 
 
@@ -52,8 +53,8 @@ class IterationState:
     started: float
     multipliers: Multipliers | None = None
     kkt: KKTResiduals | None = None
-    funnel: float | None = None
-    """The funnel's width on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`), None without one."""
+    funnel: Funnel | None = None
+    """The funnel on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`), None without one."""
     newton_radius: float = np.inf
     working_set: WorkingSet | None = None
     escapes: int = 0
