@@ -17,7 +17,7 @@ from convexguid.ocp import Problem
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
 from convexguid.scp.check_repair import Check, Repair, solve_verified
-from convexguid.scp.policies import FunnelPolicy
+from convexguid.scp.policies import FunnelPolicy, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, SCPSettings
 from convexguid.verification import Verification
 
@@ -157,6 +157,46 @@ def test_the_funnel_refuses_a_step_back_to_a_point_its_h_step_left():
     # a step that lowers the objective below that point's is taken
     accepted, ratio, _ = policy.decide(funnel, True, 0.31, low, high, f_low, f_low - (f_high - 0.01), 2.9e-2, 1e-7)
     assert accepted and ratio == 0.31
+
+
+def test_the_steps_keep_short_of_a_guarded_bound_until_nearly_on_it():
+    policy = TrustRegionPolicy(0.5, 1e-7, 1e3, 0.25, 0.75)
+    x, scale = np.array([0.1, 5e-7, 3.0]), np.array([1.0, 1.0, 2.0])
+    lower, upper = np.array([0.0, 0.0, -np.inf]), np.array([1.0, 1.0, np.inf])
+    box = policy.box(0.5, x, scale, (lower, upper))
+    # upper limits, then lower: 0.99 of the room to a bound; the radius within 1e-6 of it, or with no bound
+    assert box == pytest.approx([0.5, 0.5, 0.5, 0.099, 0.5, 0.5])
+    assert policy.box(0.5, x, scale, None) == 0.5
+
+
+def _tumor(intervals: int) -> Problem:
+    """Ledzewicz and Schaettler's tumor anti-angiogenesis (Hahnfeldt et al.'s model): minimize the tumor volume p(tf)
+    given 15 units of inhibitor; q >= 0.01 keeps ln(p/q) defined."""
+    xi, b, d, g, mu, a, total = 0.084, 5.85, 0.00873, 0.15, 0.02, 75.0, 15.0
+    top = ((b - mu) / d) ** 1.5
+    problem = Problem("tumor")
+    p = problem.state("p", bounds=(0.01, top), initial=top / 2)
+    q = problem.state("q", bounds=(0.01, top), initial=top / 4)
+    y = problem.state("y", bounds=(0.0, total), initial=0.0)
+    u = problem.control("u", bounds=(0.0, a))
+    problem.dynamics({p: -xi * p * ca.log(p / q), q: q * (b - (mu + d * p ** (2.0 / 3.0) + g * u)), y: u})
+    problem.final_time(bounds=(0.01, 5.0), guess=1.0)
+    problem.minimize_terminal(p)
+    problem.transcription(intervals)
+    return problem
+
+
+@pytest.mark.parametrize("intervals", [20, 30])
+def test_a_logarithm_guarded_by_a_state_bound_is_not_stepped_into(intervals):
+    """Unguarded, the first steps put q on its bound 0.01, where ln(p/q) makes every linearization wrong: at 20
+    intervals the run ended `max_iterations`, at 30 `infeasible` with a local phase-1 certificate."""
+    solution = _tumor(intervals).solve()
+    assert solution.status == "converged", solution.message
+    program = transcribe(_tumor(intervals))
+    ipopt = solve_with_ipopt(program)
+    assert ipopt.success
+    # the dense check may refine the grid: compare with IPOPT's optimum, the tumor's size at its minimum
+    assert solution.objective == pytest.approx(program.final_values(ipopt.z)["p"], rel=2e-3)
 
 
 class _Point:

@@ -452,6 +452,15 @@ class Transcription:
             high.append([p.tf_bounds[1]])
         return np.concatenate(low), np.concatenate(high)
 
+    def guarded_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The states' bounds, at every node: the steps keep short of them until they are nearly met
+        (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`). A state's bound is often where its dynamics stop
+        meaning anything (a mass, a density, a logarithm's argument); a control's is where bang-bang plans sit, and
+        is left unguarded."""
+        low, high = self._bounds()
+        states = np.arange(low.size) < self.control_start
+        return np.where(states, low, -np.inf), np.where(states, high, np.inf)
+
     def output_constraints(self) -> OutputConstraints:
         return OutputConstraints.none(self.residual_weights().size)
 

@@ -129,9 +129,10 @@ class SubproblemRows:
         self._column_scale = np.concatenate([scale, np.ones(self.num_z - n)])
         self._a_data_scale = self._column_scale[np.repeat(np.arange(self.num_z), np.diff(pat.indptr))]
 
-    def constraints(self, x: np.ndarray, ev: Evaluation, radius: float, head: list[np.ndarray],
+    def constraints(self, x: np.ndarray, ev: Evaluation, radius: float | np.ndarray, head: list[np.ndarray],
                     head_rhs: list[np.ndarray]) -> tuple[sp.csc_matrix, np.ndarray]:
-        """``(A, b)`` about ``x``: ``head`` the values of the rows up to the output constraints' slacks (in pattern
+        """``(A, b)`` about ``x`` (``radius``: the box on the scaled step, or its upper then lower limits per variable):
+        ``head`` the values of the rows up to the output constraints' slacks (in pattern
         order), ``head_rhs`` their right-hand sides after ``A``'s and ``G``'s (which this fills in)."""
         lin = self.linear
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
@@ -147,7 +148,7 @@ class SubproblemRows:
         e = _values(ev.equalities)
         lifted_rhs, output_rhs = head_rhs
         b = np.concatenate([lin.b - lin.A @ x, lifted_rhs, room, output_rhs, -_values(ev.inequalities), -e, e,
-                            np.zeros(self.n_slack), np.full(2 * self.n, radius), _values(ev.cones)])
+                            np.zeros(self.n_slack), np.broadcast_to(radius, 2 * self.n), _values(ev.cones)])
         return A, b
 
     def multipliers(self, z: np.ndarray) -> Multipliers:

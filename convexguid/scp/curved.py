@@ -170,6 +170,6 @@ class CurvedSubproblem:
             self.assembler = CondensedAssembler(algo.program.num_variables, state.raw, linear, algo.outputs,
                                                 algo.scale, algo.cost, algo.weights)
         values = model.working.values(ev, linear, algo.outputs, state.x)
-        program_k = self.assembler.build(state.x, ev, state.radius, state.penalty, curved=model.terms(values))
+        program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty, curved=model.terms(values))
         self.backend, result, value = algo.solved(state, program_k, self.backend, *self.backend_name())
         return result, value

@@ -118,6 +118,8 @@ class SCPAlgorithm:
         self.outputs = program.output_constraints()
         self.linear = program.linear_constraints()  # fixed for the run: read once
         self.scale = program.variable_scale()
+        guarded = getattr(program, "guarded_bounds", None)
+        self.guarded = guarded() if guarded is not None else None
         model = getattr(program, "curvature_model", None)
         self.curvature: CurvatureModel | None = model() if model is not None else None  # None: affine constraints
         self.second_order: SecondOrderModels | None = None
@@ -197,10 +199,14 @@ class SCPAlgorithm:
         when its model ``curved`` is given)."""
         if curved is not None:
             return self.curved.solve(state, ev, curved)
-        program_k = self.assembler.build(state.x, ev, state.radius, state.penalty, hessian)
+        program_k = self.assembler.build(state.x, ev, self.box(state), state.penalty, hessian)
         self.backend, result, model = self.solved(state, program_k, self.backend, self.choice.backend,
                                                   self.choice.fallback)
         return result, model
+
+    def box(self, state: IterationState) -> float | np.ndarray:
+        """The subproblem's limits on the scaled step (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`)."""
+        return self.trust_region.box(state.radius, state.x, self.scale, self.guarded)
 
     def solved(self, state: IterationState, program_k: ConicProgram, backend: Backend | None, name: str,
                fallback: str | None = None) -> tuple[Backend, BackendResult, float]:

@@ -14,6 +14,17 @@ import numpy as np
 
 from convexguid.scp.problem import Evaluation, SCPSettings
 
+FRACTION_TO_BOUNDARY = 0.99
+"""Share of its distance to a guarded bound a variable may cover in one step (:meth:`TrustRegionPolicy.box`)."""
+
+BOUNDARY_REACH = 1e-6
+"""Scaled distance to a guarded bound from which a step may reach the bound itself (an active bound is then met in
+a few iterations: the distance shrinks a hundredfold per step until it is this small)."""
+
+
+def _short_of(radius: float, room: np.ndarray) -> np.ndarray:
+    return np.where(room > BOUNDARY_REACH, np.minimum(radius, FRACTION_TO_BOUNDARY * room), radius)
+
 
 @dataclass(frozen=True)
 class TrustRegionPolicy:
@@ -33,6 +44,22 @@ class TrustRegionPolicy:
     @classmethod
     def from_settings(cls, s: SCPSettings) -> TrustRegionPolicy:
         return cls(s.trust_region, s.trust_region_min, s.trust_region_max, s.shrink_ratio, s.expand_ratio)
+
+    def box(self, radius: float, x: np.ndarray, scale: np.ndarray,
+            guarded: tuple[np.ndarray, np.ndarray] | None) -> float | np.ndarray:
+        """The limits of the scaled step, upper then lower: the radius, and for each variable with a guarded bound at
+        most :data:`FRACTION_TO_BOUNDARY` of its distance to the bound (IPOPT's fraction-to-the-boundary rule: Wachter
+        & Biegler, Math. Program. 106, 2006, eq. 15) until it is within :data:`BOUNDARY_REACH` of it.
+
+        A guarded bound keeps the iterates inside the domain where the program's maps mean something (a mass above
+        zero, a logarithm's argument above its floor): a step that puts the variable on such a bound linearizes
+        where the next model is useless. Measured on the tumor anti-angiogenesis problem (q >= 0.01 inside
+        p' = -xi p ln(p/q)): unguarded, the first steps put q on its bound at 10, 20 and 30 intervals and the runs
+        ended `max_iterations` or `infeasible`; guarded, all converge (10 to 45 iterations)."""
+        if guarded is None:
+            return radius
+        lower, upper = guarded
+        return np.concatenate([_short_of(radius, (upper - x) / scale), _short_of(radius, (x - lower) / scale)])
 
     def update(self, radius: float, ratio: float, step: float) -> float:
         if ratio < self.shrink:

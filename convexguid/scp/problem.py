@@ -181,6 +181,8 @@ class NonconvexProgram(Protocol):
     ``A`` and ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``. ``affine``: True when every
     nonlinear map is in fact affine (the subproblem is then the program itself: the first step takes the widest
     trust region, and the problem is solved by one convex program and confirmed by the next).
+    ``guarded_bounds() -> (lower, upper)``: bounds of variables whose maps lose their meaning beyond them; the steps
+    keep short of them until nearly met (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`).
     """
 
     num_variables: int
