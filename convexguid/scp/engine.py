@@ -8,7 +8,8 @@ start point into an :class:`~convexguid.scp.state.IterationState`, and each
 2. assemble the trust-region subproblem with penalized slacks, lifted (:mod:`convexguid.scp.assembly`)
    or condensed (:mod:`convexguid.scp.condensed`) as decided once per run from the backend setting
    and the program's first evaluation (:mod:`convexguid.scp.choice`), and solve it with the chosen
-   backend (a numerical failure retried with a smaller radius, ``max_backend_failures`` times in a row);
+   backend (a numerical failure retried with a smaller radius, ``max_backend_failures`` times in a row); the
+   box keeps short of a program's guarded bounds (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`);
 3. judge the step by the ratio of actual to predicted decrease of the exact-penalty merit
 
    .. math::
