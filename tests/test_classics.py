@@ -267,3 +267,74 @@ def test_a_failed_check_names_a_control_that_jumps_across_its_range():
     z[program.control_start: program.slack_start] = np.where(np.argsort(np.argsort(shares)) % 2 == 0, 0.0, 2.0)
     (remark,) = jumping_controls(program, z)
     assert remark.startswith("control u moves by more than 50% of its range")
+
+
+def _single_stage_to_orbit() -> Problem:
+    """Dymos' single stage to orbit (examples/ssto, Earth; after Longuski, Guzman & Prussing 2014): minimum time to
+    185 km at orbital speed, with drag; the vertical speed starts at 1e-6 m/s to keep the drag's direction defined."""
+    g, thrust, isp, drag_area = 9.80665, 2.1e6, 265.2, 0.5 * 7.069
+    problem = Problem("ssto")
+    x = problem.state("x", initial=0.0)
+    y = problem.state("y", initial=0.0, final=1.85e5)
+    vx = problem.state("vx", initial=0.0, final=7796.6961)
+    vy = problem.state("vy", initial=1e-6, final=0.0)
+    m = problem.state("m", bounds=(1000.0, None), initial=117000.0)
+    theta = problem.control("theta", bounds=(-1.5708, 1.5708))
+    speed = ca.sqrt(vx**2 + vy**2 + 1e-6)
+    drag = 0.5 * 1.225 * ca.exp(-y / 8440.0) * speed**2 * drag_area
+    problem.dynamics({x: vx, y: vy, vx: (thrust * ca.cos(theta) - drag * vx / speed) / m,
+                      vy: (thrust * ca.sin(theta) - drag * vy / speed) / m - g, m: -thrust / (g * isp)})
+    problem.final_time(bounds=(10.0, 1000.0), guess=150.0)
+    problem.minimize_time()
+    problem.transcription(40)
+    return problem
+
+
+def test_a_state_whose_stated_values_are_negligible_is_scaled_by_the_change_its_rate_makes():
+    problem = _single_stage_to_orbit()
+    scales = dict(zip([v.name for v in problem.states], problem.state_scales(), strict=True))
+    assert scales["vy"] > 1e3  # not its initial 1e-6 m/s
+    assert scales["y"] == 1.85e5 and scales["m"] == 117000.0  # values of a sensible size are kept
+
+
+def test_the_single_stage_to_orbit_converges_to_ipopts_time():
+    """Scaled by its initial 1e-6 m/s, the vertical speed's defects were 1e7 and every convex subproblem failed
+    (`solver_error` after four)."""
+    solution = _single_stage_to_orbit().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    program = transcribe(_single_stage_to_orbit())
+    ipopt = solve_with_ipopt(program)
+    assert ipopt.success
+    # the dense check may refine the grid: within 0.1% of IPOPT's time on the first one (Dymos asserts 143 s +- 5%)
+    assert solution.figures.final_time_s == pytest.approx(program.final_time(ipopt.z), rel=1e-3)
+
+
+def _cart_pole() -> Problem:
+    """Kelly's cart-pole swing-up (SIAM Review 59(4), 2017, Sec. 6 and App. E): minimum integral of the force squared,
+    the pole from hanging to upright and the cart moved 1 m in 2 s."""
+    cart, pole, length, g = 1.0, 0.3, 0.5, 9.81
+    problem = Problem("cart-pole")
+    q1 = problem.state("q1", bounds=(-2.0, 2.0), initial=0.0, final=1.0)
+    q2 = problem.state("q2", initial=0.0, final=math.pi)
+    dq1, dq2 = problem.state("dq1", initial=0.0, final=0.0), problem.state("dq2", initial=0.0, final=0.0)
+    u = problem.control("u", bounds=(-20.0, 20.0))
+    sin, cos = ca.sin(q2), ca.cos(q2)
+    problem.dynamics({q1: dq1, q2: dq2,
+                      dq1: (length * pole * sin * dq2**2 + u + pole * g * cos * sin) / (cart + pole * sin**2),
+                      dq2: -(length * pole * cos * sin * dq2**2 + u * cos + (cart + pole) * g * sin)
+                      / (length * cart + length * pole * sin**2)})
+    problem.final_time(fixed=2.0)
+    problem.minimize_energy()
+    problem.transcription(40)
+    return problem
+
+
+def test_a_penalty_below_the_multipliers_is_raised_while_the_steps_stay_inside_the_region():
+    """At the starting weight the violation sat at 1e-2 through 60 steps inside the trust region (62 iterations in
+    all, against IPOPT's 17); steered, the weight rises at the first such step."""
+    solution = _cart_pole().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    ipopt = solve_with_ipopt(transcribe(_cart_pole()))
+    assert ipopt.success
+    assert solution.objective == pytest.approx(ipopt.objective, rel=1e-3)  # the dense check may refine the grid
+    assert solution.iterations <= 2 * ipopt.iterations

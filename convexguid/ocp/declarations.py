@@ -27,9 +27,10 @@ class Variable:
     period: float | None = None
     """For an angle control without bounds: the period (2 pi) its values may be shifted by, see
     :meth:`Problem.control`."""
-    magnitude_stated: bool = True
-    """False when nothing stated gives the variable's size (no scale, no bound, no nonzero boundary value): a state's
-    scale is then estimated from its rate (:meth:`Problem.state_scales`)."""
+    scale_from: str = "stated"
+    """Where ``scale`` came from: ``"stated"`` by the user, ``"values"`` the largest magnitude of its bounds and
+    boundary values, ``"none"`` (1) when nothing gives its size; a state's scale of the last two kinds may be
+    estimated from its rate instead (:meth:`Problem.state_scales`)."""
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,10 @@ from convexguid.ocp.declarations import PathConstraint, Variable, number
 from convexguid.ocp.size import check_problem_size
 
 TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh", "chebyshev", "flow")
+
+NEGLIGIBLE = 1e-4
+"""A state's bounds and boundary values give its scale unless all are below this share of the change its rate can
+make over the horizon (:meth:`Problem.state_scales`)."""
 """The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
 :mod:`convexguid.ocp.hold`, :mod:`convexguid.ocp.chebyshev`; ``"flow"``: a closed-form flow, :meth:`Problem.flow`)."""
 
@@ -90,7 +94,8 @@ class Problem:
             raise SpecError(f"{where}: unit: expected a string such as 'm/s' (got {unit!r})")
         return Variable(name, ca.SX.sym(name), lower, upper, initial, final, scale,
                         number(f"{where}: guess", guess), unit,
-                        magnitude_stated=stated is not None or any(m > 0 for m in magnitudes))
+                        scale_from="stated" if stated is not None else "values" if any(m > 0 for m in magnitudes)
+                        else "none")
 
     def state(self, name: str, bounds: tuple[float | None, float | None] | None = None, initial: float | None = None,
               final: float | None = None, scale: float | None = None, unit: str = "") -> ca.SX:
@@ -451,10 +456,15 @@ class Problem:
         at its guess and across its range in turn (nine values between finite bounds), when that is above 1. The
         trust region is a box in scaled variables, so a state of unknown size scaled by 1 could move by about 1 per
         iteration whatever its range (measured on COPS particle steering: a position that ends near 12 held every
-        step to 0.03-0.5, 100 iterations without convergence). The defects and the final-state check are measured
-        in the same magnitude."""
+        step to 0.03-0.5, 100 iterations without convergence). Bounds and boundary values give the size unless
+        they are all below :data:`NEGLIGIBLE` times that change: Dymos' single stage to orbit starts its vertical
+        speed at 1e-6 m/s to keep the drag's direction defined, and it reaches hundreds of m/s (scaled by 1e-6, the
+        first defects were 1e7 and the first convex subproblem failed). The estimate is crude (at the
+        straight-line guess, every control extreme), so it does not override values of a sensible size: raised to
+        it, Betts' shuttle took 491 iterations against 169. The defects and the final-state check are measured in
+        the same magnitude."""
         scales = np.array([v.scale for v in self.states])
-        unknown = [i for i, v in enumerate(self.states) if not v.magnitude_stated]
+        unknown = [i for i, v in enumerate(self.states) if v.scale_from != "stated"]
         if not unknown:
             return scales
         horizon = self.tf if self.tf is not None else self.tf_guess
@@ -470,7 +480,12 @@ class Problem:
             for u in samples:
                 value = np.abs(np.asarray(rate(start + share * (end - start), u, share * horizon)).ravel())
                 largest = np.maximum(largest, np.where(np.isfinite(value), value, 0.0))
-        scales[unknown] = np.maximum(horizon * largest[unknown], 1.0)
+        change = horizon * largest
+        for i in unknown:
+            if self.states[i].scale_from == "none":
+                scales[i] = max(change[i], 1.0)
+            elif scales[i] < NEGLIGIBLE * change[i]:
+                scales[i] = change[i]
         return scales
 
     @property

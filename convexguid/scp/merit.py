@@ -38,5 +38,8 @@ def penalty_sum(ev: Evaluation) -> float:
 
 
 def decrease_ratio(actual: float, predicted: float) -> float:
-    """Actual over predicted decrease of the merit function."""
+    """Actual over predicted decrease of the merit function; -1 where the trial point's merit is not a number (the
+    program is undefined there: a logarithm of a negative value), so the step is refused and the region shrinks."""
+    if not np.isfinite(actual):
+        return -1.0
     return actual / predicted if predicted > 0 else (1.0 if actual >= 0 else -1.0)
