@@ -174,7 +174,8 @@ class SCPAlgorithm:
                                merit=self.merit(ev, x, rho), penalty=rho, radius=self.settings.trust_region_max
                                if getattr(self.program, "affine", False) else self.trust_region.initial,
                                started=started,
-                               funnel=self.funnel.initial(penalty_sum(ev)) if self.settings.funnel else None)
+                               funnel=self.funnel.initial(penalty_sum(ev), warm=penalty is not None)
+                               if self.settings.funnel else None)
         if infeasible:
             state.finish("infeasible", "certificate: " + restored.certificate)
         if self.assembler is None:
