@@ -105,8 +105,9 @@ class _Layout:
         entry_row = A.indices
         row_len = np.bincount(entry_row, minlength=n_rows)
         singleton = (row_len == 1) & (np.arange(n_rows) >= nz)
-        # entries of each row (CSR order over positions in A.data)
-        by_row = np.lexsort((entry_col, entry_row))
+        # entries of each row (CSR order over positions in A.data): A is canonical CSC, so a stable sort by row
+        # alone keeps each row's entries by column (the order np.lexsort((entry_col, entry_row)) gives)
+        by_row = np.argsort(entry_row, kind="stable")
         row_ptr = np.concatenate([[0], np.cumsum(row_len)])
 
         def row_entries(i: int) -> np.ndarray:
