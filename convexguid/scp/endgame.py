@@ -161,7 +161,7 @@ class SecondOrderModels:
 
     def at(self, x: np.ndarray, raw: Evaluation, multipliers: Multipliers, working: WorkingSet) -> LocalModel:
         """The model at ``x`` (``raw``: the program's evaluation there, with Jacobians) on ``working``."""
-        omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs.M)
+        omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs)
         curvature = self.hessian(x, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
         hessian = self.gauss_newton(raw) + _scaled_dense(curvature, self.scale)
         gradient = objective_gradient(raw, self.weights, self.cost)

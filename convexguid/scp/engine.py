@@ -339,7 +339,7 @@ class SCPAlgorithm:
         """The program's convex curvature model at the iterate, weighted by the state's multipliers."""
         m = state.multipliers
         t = time.perf_counter()
-        omega = m.residual_weights(state.raw.residuals, self.weights, self.outputs.M)
+        omega = m.residual_weights(state.raw.residuals, self.weights, self.outputs)
         values = self.curvature.values(state.x, CurvatureWeights(omega, m.inequality, m.equality))
         state.convexify_time_s += time.perf_counter() - t
         return values

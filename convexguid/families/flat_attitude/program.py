@@ -197,17 +197,25 @@ class FlatAttitudeProgram:
 
         .. math:: \\partial u_k/\\partial\\zeta_j = A_k\\delta_{kj} + s B_k D_{kj} + s^2 C_k D^{(2)}_{kj}
         """
-        p, s = self.problem, self.problem.time_scale
+        p = self.problem
 
         def torque(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
             return flat_torque(p.inertia, a, b, c)
 
         local = pointwise_jacobians(torque, (z, zd, zdd))
-        jac = np.einsum("kab,kj->kajb", local[1], s * p.grid.d1)
-        jac += np.einsum("kab,kj->kajb", local[2], s * s * p.grid.d2)
+        d1, d2 = self._scaled_differentiation
+        # jac[k, a, j, b]: each entry one product (the outer products einsum("kab,kj->kajb") forms, broadcast)
+        jac = local[1][:, :, None, :] * d1[:, None, :, None]
+        jac += local[2][:, :, None, :] * d2[:, None, :, None]
         idx = np.arange(self.num_nodes)
         jac[idx, :, idx, :] += local[0]
         return jac.reshape(self.num_variables, self.num_variables)
+
+    @cached_property
+    def _scaled_differentiation(self) -> tuple[np.ndarray, np.ndarray]:
+        """:math:`s D` and :math:`s^2 D^{(2)}`: the rates and accelerations at the nodes from the angles (eq. 23)."""
+        p, s = self.problem, self.problem.time_scale
+        return s * p.grid.d1, s * s * p.grid.d2
 
     def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
         p = self.problem
@@ -249,7 +257,7 @@ class FlatAttitudeProgram:
             start += path.shape[0]
             if np.any(mu):
                 cone_local = hessian(z_path, mu[:, None])
-                P = np.kron(path, np.eye(3)).reshape(path.shape[0], 3, self.num_variables)
+                P = self._path_maps
                 H += P.reshape(-1, self.num_variables).T @ np.einsum("pab,pbj->paj", cone_local, P).reshape(
                     -1, self.num_variables)
         return 0.5 * (H + H.T)
@@ -263,6 +271,12 @@ class FlatAttitudeProgram:
     def _cone_hessians(self) -> tuple[RowHessian, ...]:
         rows = self.problem.path_interpolation.shape[0]
         return tuple(RowHessian(partial(cone_cosine, cone), (3,), 1, rows) for cone in self.problem.cones)
+
+    @cached_property
+    def _path_maps(self) -> np.ndarray:
+        """:math:`P_p \\otimes I_3`: each path point's angles (rows) from the design vector, ``(point, 3, variables)``."""
+        path = self.problem.path_interpolation
+        return np.kron(path, np.eye(3)).reshape(path.shape[0], 3, self.num_variables)
 
     @cached_property
     def _node_maps(self) -> np.ndarray:
