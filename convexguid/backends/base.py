@@ -105,15 +105,24 @@ class Backend(ABC):
                          program.A.indptr.copy(), program.A.indices.copy(), program.cones)
         self._setup(program)
 
-    def update(self, program: ConicProgram) -> None:
-        """Replace the numbers of the program; the sparsity pattern must not change."""
+    def same_pattern(self, program: ConicProgram) -> bool:
+        """Whether ``program`` has the cones and the sparsity pattern of this backend's first program."""
         P_ptr, P_idx, A_ptr, A_idx, cones = self._pattern
-        same = (program.cones == cones and np.array_equal(program.P.indptr, P_ptr)
+        return (program.cones == cones and np.array_equal(program.P.indptr, P_ptr)
                 and np.array_equal(program.A.indptr, A_ptr) and np.array_equal(program.P.indices, P_idx)
                 and np.array_equal(program.A.indices, A_idx))
-        if not same:
+
+    def update(self, program: ConicProgram) -> None:
+        """Replace the numbers of the program; the sparsity pattern must not change."""
+        if not self.same_pattern(program):
             raise ValueError(f"backend {self.name}: update() needs the sparsity pattern of the first program")
         self._update(program)
+
+    def sibling(self, program: ConicProgram) -> Backend | None:
+        """A second backend of this kind and settings for ``program`` (a program of the same pattern and
+        structure, solved alongside: the end game's curved subproblem), with a warm start of its own and whatever
+        this one read from the pattern taken over; ``None`` when that is not possible (set one up anew)."""
+        return None
 
     @abstractmethod
     def _setup(self, program: ConicProgram) -> None: ...

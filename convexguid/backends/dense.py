@@ -36,6 +36,7 @@ duality gap (``optimal`` within the tolerance, ``optimal_inaccurate`` within
 
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import dataclass
 
@@ -255,6 +256,16 @@ class DaqpBackend(Backend):
 
     def _update(self, program: ConicProgram) -> None:
         self._program = _canonical(program)
+
+    def sibling(self, program: ConicProgram) -> DaqpBackend | None:
+        """This backend's layout for ``program`` of the same pattern, when the program has its structure (the
+        check every solve makes), with no warm start: reading the layout again costs as much as a few solves."""
+        if not self.same_pattern(program) or self._layout.check(_canonical(program)):
+            return None
+        twin = copy.copy(self)
+        twin._update(program)
+        twin._high = twin._lam = None
+        return twin
 
     def solve(self) -> BackendResult:
         start = time.perf_counter()

@@ -174,5 +174,8 @@ class CurvedSubproblem:
                                    algo.cost, algo.weights)
         values = model.working.values(ev, linear, algo.outputs, state.x)
         program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty, curved=model.terms(values))
-        self.backend, result, value = algo.solved(state, program_k, self.backend, *self.backend_name())
+        name, fallback = self.backend_name()
+        # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
+        like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
+        self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)
         return result, value

@@ -210,9 +210,12 @@ class SCPAlgorithm:
         return self.trust_region.box(state.radius, state.x, self.scale, self.guarded)
 
     def solved(self, state: IterationState, program_k: ConicProgram, backend: Backend | None, name: str,
-               fallback: str | None = None) -> tuple[Backend, BackendResult, float]:
-        """``program_k`` solved by ``backend`` (made at the first call from ``name`` and ``fallback``, then only
-        updated), its time counted; returns the backend, its answer and the model's merit after the step."""
+               fallback: str | None = None, like: Backend | None = None) -> tuple[Backend, BackendResult, float]:
+        """``program_k`` solved by ``backend`` (made at the first call from ``name`` and ``fallback``, or as the
+        sibling of ``like``, a backend of that name on the same pattern; then only updated), its time counted;
+        returns the backend, its answer and the model's merit after the step."""
+        if backend is None and like is not None:
+            backend = like.sibling(program_k)  # set for program_k: the update below only repeats it
         if backend is None:
             backend = make_backend(name, program_k, self.settings.backend_tolerance, fallback=fallback,
                                    iterative_refinement=self.settings.iterative_refinement)
