@@ -247,19 +247,14 @@ class FlatAttitudeProgram:
         z, zd, zdd = p.flat_derivatives(x)
         omega = np.asarray(weights.residual, dtype=float).reshape(n1, 3)
         local = self._torque_hessian(np.hstack([z, zd, zdd]), omega)
-        T = self._node_maps  # (node, 9, variables): S_k with each row for the three components
-        H = np.einsum("kab,kbj->kaj", local, T).reshape(-1, self.num_variables)
-        H = T.reshape(-1, self.num_variables).T @ H
+        H = _sandwiched(self._node_rows, local)
         path = p.path_interpolation
         z_path, start = path @ z, 0
         for hessian in self._cone_hessians:
             mu = np.asarray(weights.inequality[start: start + path.shape[0]], dtype=float)
             start += path.shape[0]
             if np.any(mu):
-                cone_local = hessian(z_path, mu[:, None])
-                P = self._path_maps
-                H += P.reshape(-1, self.num_variables).T @ np.einsum("pab,pbj->paj", cone_local, P).reshape(
-                    -1, self.num_variables)
+                H += _sandwiched(path[:, None, :], hessian(z_path, mu[:, None]))
         return 0.5 * (H + H.T)
 
     @cached_property
@@ -273,18 +268,10 @@ class FlatAttitudeProgram:
         return tuple(RowHessian(partial(cone_cosine, cone), (3,), 1, rows) for cone in self.problem.cones)
 
     @cached_property
-    def _path_maps(self) -> np.ndarray:
-        """:math:`P_p \\otimes I_3`: each path point's angles (rows) from the design vector, ``(point, 3, variables)``."""
-        path = self.problem.path_interpolation
-        return np.kron(path, np.eye(3)).reshape(path.shape[0], 3, self.num_variables)
-
-    @cached_property
-    def _node_maps(self) -> np.ndarray:
-        """:math:`S_k \\otimes I_3`: each node's angles, rates and accelerations (rows) from the design vector."""
-        p, n1 = self.problem, self.num_nodes
-        s = p.time_scale
-        rows = np.stack([np.eye(n1), s * p.grid.d1, s * s * p.grid.d2], axis=1)  # (node, role, node)
-        return np.kron(rows.reshape(n1 * 3, n1), np.eye(3)).reshape(n1, 9, self.num_variables)
+    def _node_rows(self) -> np.ndarray:
+        """:math:`S_k`: each node's angle, rate and acceleration (rows) from the node angles, ``(node, 3, node)``."""
+        d1, d2 = self._scaled_differentiation
+        return np.stack([np.eye(self.num_nodes), d1, d2], axis=1)
 
 
 class RowHessian:
@@ -327,6 +314,20 @@ class RowHessian:
         buffer.set_res(0, memoryview(out))
         evaluate()
         return out.transpose(0, 2, 1)
+
+
+def _sandwiched(rows: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """:math:`\\sum_k (S_k \\otimes I_3)^T G_k (S_k \\otimes I_3)` for maps :math:`S_k` ``rows`` ``(k, q, n)`` of the
+    node angles and local Hessians :math:`G_k` ``local`` ``(k, 3q, 3q)`` (index: row of :math:`S_k` times 3 plus
+    axis); the design vector is the node angles, node-major. The Kronecker factor's zeros are never multiplied:
+    :math:`W_k = G_k (S_k \\otimes I_3)` per node, then one product over nodes and rows, a third of the work of
+    the Kronecker form."""
+    k, q, n = rows.shape
+    # W[k, (r, a, b), j] = sum_t G_k[(r, a), (t, b)] S_k[t, j]
+    per_row = local.reshape(k, q, 3, q, 3).transpose(0, 1, 2, 4, 3).reshape(k, 9 * q, q) @ rows
+    # H[i, (a, b, j)] = sum_{k, r} S_k[r, i] W[k, (r, a, b), j]
+    H = rows.reshape(k * q, n).T @ per_row.reshape(k * q, 9 * n)
+    return H.reshape(n, 3, 3, n).transpose(0, 1, 3, 2).reshape(3 * n, 3 * n)
 
 
 def build_problem(spec) -> FlatAttitudeProblem:
