@@ -83,6 +83,9 @@ class BackendResult:
     primal_residual: float
     dual_residual: float
     z: np.ndarray | None = None
+    exact_objective: bool = False
+    """``objective`` is :meth:`ConicProgram.objective` at ``x`` less the constant, evaluated as that method does
+    (the dense backend's own check of its answer), so a caller need not evaluate it a second time."""
 
     @property
     def usable(self) -> bool:

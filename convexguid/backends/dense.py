@@ -248,14 +248,15 @@ class DaqpBackend(Backend):
 
         if program.cones.soc:
             raise BackendError("backend 'daqp' cannot take second-order cones; use 'clarabel'")
-        program = _canonical(program)
-        self._layout = _Layout(program)
-        self._program = program
+        canonical = _canonical(program)
+        self._layout = _Layout(canonical)
+        self._program, self._as_given = canonical, canonical is program  # as given: its objective is ours
         self._high: np.ndarray | None = None  # the piece of every penalty at the last solution
         self._lam: np.ndarray | None = None  # DAQP's multipliers at the last solution
 
     def _update(self, program: ConicProgram) -> None:
         self._program = _canonical(program)
+        self._as_given = self._program is program
 
     def sibling(self, program: ConicProgram) -> DaqpBackend | None:
         """This backend's layout for ``program`` of the same pattern, when the program has its structure (the
@@ -283,7 +284,7 @@ class DaqpBackend(Backend):
             return BackendResult(status, None, float("nan"), iterations, time.perf_counter() - start,
                                  float("nan"), float("nan"))
         px = prog.hessian_times(x)
-        objective = float(0.5 * x @ px + prog.q @ x)
+        objective = float(0.5 * x @ px + prog.q @ x)  # ConicProgram.objective's sum, less the constant
         s = prog.b - prog.A @ x
         nz = prog.cones.zero
         primal = max(float(np.max(np.abs(s[:nz]), initial=0.0)), float(np.max(-s[nz:], initial=0.0)))
@@ -292,7 +293,7 @@ class DaqpBackend(Backend):
         status = self._grade(prog, objective, primal, dual, gap)
         elapsed = time.perf_counter() - start
         return BackendResult(status, x if status != "failed" else None, objective, iterations, elapsed, primal,
-                             dual, z if status != "failed" else None)
+                             dual, z if status != "failed" else None, exact_objective=self._as_given)
 
     def _grade(self, prog: ConicProgram, objective: float, primal: float, dual: float, gap: float) -> str:
         """``optimal`` when the residuals meet the tolerance, relative to the data (as Clarabel measures them)."""

@@ -223,8 +223,10 @@ class SCPAlgorithm:
             backend.update(program_k)
         result = backend.solve()
         state.solver_time_s += result.solve_time_s
-        model = program_k.objective(result.x) + self.cost @ state.x if result.usable else float("nan")
-        return backend, result, model
+        if not result.usable:
+            return backend, result, float("nan")
+        value = result.objective + program_k.constant if result.exact_objective else program_k.objective(result.x)
+        return backend, result, value + self.cost @ state.x
 
     def record(self, state: IterationState, step: float, ratio: float, accepted: bool,
                result: BackendResult) -> None:
