@@ -191,6 +191,9 @@ class NonconvexProgram(Protocol):
     trust region, and the problem is solved by one convex program and confirmed by the next).
     ``guarded_bounds() -> (lower, upper)``: bounds of variables whose maps lose their meaning beyond them; the steps
     keep short of them until nearly met (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`).
+    ``with_jacobians(x, values) -> Evaluation``: ``values`` (``evaluate(x, jacobians=False)``) with the Jacobians at
+    ``x`` added, the same as ``evaluate(x)``: the engine then does not compute the maps twice at a trial point it
+    accepts.
     """
 
     num_variables: int

@@ -29,7 +29,7 @@ planning for space vehicles under multiple constraints", J. Dynamics and Control
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property, partial
 
 import casadi as ca
@@ -221,18 +221,24 @@ class FlatAttitudeProgram:
         p = self.problem
         z, zd, zdd = p.flat_derivatives(x)
         u = flat_torque(p.inertia, z, zd, zdd)
+        z_path = p.path_interpolation @ z
+        blocks = tuple(ConstraintBlock(f"keep_out_{cone.name}", cone_cosine(cone, z_path)
+                                       - np.cos(cone.half_angle_rad + p.cone_margin_rad), None, "cos")
+                       for cone in p.cones)
+        values = Evaluation(u.ravel(), None, blocks)
+        return self.with_jacobians(x, values) if jacobians else values
+
+    def with_jacobians(self, x: np.ndarray, values: Evaluation) -> Evaluation:
+        """``values`` (:meth:`evaluate` at ``x`` without Jacobians) with the torque's and the cones' Jacobians."""
+        p = self.problem
+        z, zd, zdd = p.flat_derivatives(x)
         path = p.path_interpolation
-        jac_u = self._torque_jacobian(z, zd, zdd) if jacobians else None
-        blocks = []
         z_path = path @ z
-        for cone in p.cones:
-            values = cone_cosine(cone, z_path) - np.cos(cone.half_angle_rad + p.cone_margin_rad)
-            jac = None
-            if jacobians:
-                local = pointwise_jacobian(partial(cone_cosine, cone), (z_path,), 0)
-                jac = (local[:, None, :] * path[:, :, None]).reshape(path.shape[0], -1)
-            blocks.append(ConstraintBlock(f"keep_out_{cone.name}", values, jac, "cos"))
-        return Evaluation(u.ravel(), jac_u, tuple(blocks))
+        blocks = []
+        for cone, block in zip(p.cones, values.inequalities, strict=True):
+            local = pointwise_jacobian(partial(cone_cosine, cone), (z_path,), 0)
+            blocks.append(replace(block, jacobian=(local[:, None, :] * path[:, :, None]).reshape(path.shape[0], -1)))
+        return replace(values, residual_jacobian=self._torque_jacobian(z, zd, zdd), inequalities=tuple(blocks))
 
     def lagrangian_hessian(self, x: np.ndarray, weights) -> np.ndarray:
         """The curvature :math:`\\sum_k \\omega_k^T \\nabla^2 u_k + \\sum_p \\mu_p \\nabla^2 c_p` of the torques
