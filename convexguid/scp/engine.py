@@ -56,6 +56,7 @@ from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
 from convexguid.scp.endgame import SecondOrderModels, linearized_violation
+from convexguid.scp.evaluations import ProgramEvaluations
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, has_jacobian
 from convexguid.scp.merit import (
     decrease_ratio,
@@ -92,10 +93,6 @@ the violation's minimum (COPS' hang glider spent 140 phase-1 iterations taking i
 PINNED = 0.9
 """A linear subproblem's step of at least this share of the trust radius reached it (see ``IterationState.pinned``)."""
 
-MAX_TRIALS_KEPT = 8
-"""Trial points of one iteration whose evaluations are kept for :meth:`SCPAlgorithm._program_evaluation` (an
-iteration tries at most four: the step, Newton's, and a second-order correction of each)."""
-
 POLISH_ITERATIONS = 20
 """A feasible stall whose KKT residuals are above tolerance goes on polishing (the curved subproblem of
 :mod:`convexguid.scp.curved`, Newton's steps) until it has stalled this many times more; then it is reported
@@ -123,8 +120,7 @@ class SCPAlgorithm:
         self.outputs = program.output_constraints()
         self.linear = program.linear_constraints()  # fixed for the run: read once
         self.scale = program.variable_scale()
-        # the points evaluated without Jacobians since the last evaluation with them: (point, its copy, evaluation)
-        self._trials: list[tuple[np.ndarray, np.ndarray, Evaluation]] = []
+        self.evaluations = ProgramEvaluations(program)
         guarded = getattr(program, "guarded_bounds", None)
         self.guarded = guarded() if guarded is not None else None
         model = getattr(program, "curvature_model", None)
@@ -141,28 +137,12 @@ class SCPAlgorithm:
         """The program's own evaluation, and one that also lists the output constraints' values and the cones'
         violations (what the merit function and the reports count)."""
         t = time.perf_counter()
-        raw = self._program_evaluation(x, jacobians)
+        raw = self.evaluations(x, jacobians)
         ev = replace(raw, inequalities=self.outputs.blocks_at(raw.residuals) + raw.inequalities
                      + tuple(cone.as_inequality() for cone in raw.cones))
         if state is not None:
             state.convexify_time_s += time.perf_counter() - t
         return raw, ev
-
-    def _program_evaluation(self, x: np.ndarray, jacobians: bool) -> Evaluation:
-        """``program.evaluate(x, jacobians)``; at a trial point evaluated without Jacobians since the iterate last
-        moved (the one just accepted: the same array, its values unchanged), a program with ``with_jacobians`` only
-        adds them to that evaluation."""
-        complete = getattr(self.program, "with_jacobians", None)
-        if not jacobians:
-            raw = self.program.evaluate(x, False)
-            if complete is not None and len(self._trials) < MAX_TRIALS_KEPT:
-                self._trials.append((x, x.copy(), raw))
-            return raw
-        trials, self._trials = self._trials, []
-        for point, copy, raw in trials:
-            if point is x and np.array_equal(copy, x):
-                return complete(x, raw)
-        return self.program.evaluate(x, True)
 
     def objective(self, ev: Evaluation, x: np.ndarray) -> float:
         return objective_value(ev, self.weights, self.cost, x)
