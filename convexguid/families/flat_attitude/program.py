@@ -32,14 +32,12 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from functools import cached_property, partial
 
-import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
 from convexguid.dynamics.rigid_body import euler_torque
-from convexguid.families.flat_attitude.complex_step import pointwise_jacobian, pointwise_jacobians
+from convexguid.families.flat_attitude.row_derivatives import RowDerivative
 from convexguid.geometry import PointingCone
-from convexguid.ocp.parts import DERIVATIVES
 from convexguid.rotations import euler321_body_rates, euler321_rates_from_body, euler321_to_dcm
 from convexguid.scp.problem import (
     ConstraintBlock,
@@ -193,16 +191,12 @@ class FlatAttitudeProgram:
                                  (OutputBlock("torque_Nm", slice(0, 2 * rows), "N m"),))
 
     def _torque_jacobian(self, z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
-        """Torque Jacobian from complex-step local partials :math:`A_k, B_k, C_k` of eq. (12).
+        """Torque Jacobian from the local partials :math:`A_k, B_k, C_k` of eq. (12) (exact: CasADi's of the same map).
 
         .. math:: \\partial u_k/\\partial\\zeta_j = A_k\\delta_{kj} + s B_k D_{kj} + s^2 C_k D^{(2)}_{kj}
         """
-        p = self.problem
-
-        def torque(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-            return flat_torque(p.inertia, a, b, c)
-
-        local = pointwise_jacobians(torque, (z, zd, zdd))
+        partials = self._torque_partials(np.hstack([z, zd, zdd]))
+        local = [partials[:, :, 3 * i: 3 * i + 3] for i in range(3)]
         d1, d2 = self._scaled_differentiation
         # jac[k, a, j, b]: each entry one product (the outer products einsum("kab,kj->kajb") forms, broadcast)
         jac = local[1][:, :, None, :] * d1[:, None, :, None]
@@ -235,8 +229,8 @@ class FlatAttitudeProgram:
         path = p.path_interpolation
         z_path = path @ z
         blocks = []
-        for cone, block in zip(p.cones, values.inequalities, strict=True):
-            local = pointwise_jacobian(partial(cone_cosine, cone), (z_path,), 0)
+        for jacobian, block in zip(self._cone_jacobians, values.inequalities, strict=True):
+            local = jacobian(z_path)[:, 0, :]
             blocks.append(replace(block, jacobian=(local[:, None, :] * path[:, :, None]).reshape(path.shape[0], -1)))
         return replace(values, residual_jacobian=self._torque_jacobian(z, zd, zdd), inequalities=tuple(blocks))
 
@@ -248,7 +242,7 @@ class FlatAttitudeProgram:
         design vector (:math:`S_k` the node's row of the identity, of :math:`s D` and of :math:`s^2 D^{(2)}`), so
         :math:`\\nabla^2 (\\omega_k^T u_k) = S_k^T G_k S_k` with :math:`G_k` the 9 x 9 Hessian of
         :math:`\\omega_k^T \\Gamma_u`; likewise each cone at a path point through the interpolation row. The local
-        Hessians are exact (:class:`RowHessian`: CasADi's second derivatives of the same maps)."""
+        Hessians are exact (:class:`RowDerivative`: CasADi's second derivatives of the same maps)."""
         p, n1 = self.problem, self.num_nodes
         z, zd, zdd = p.flat_derivatives(x)
         omega = np.asarray(weights.residual, dtype=float).reshape(n1, 3)
@@ -263,63 +257,35 @@ class FlatAttitudeProgram:
                 H += _sandwiched(path[:, None, :], hessian(z_path, mu[:, None]))
         return 0.5 * (H + H.T)
 
-    @cached_property
-    def _torque_hessian(self) -> RowHessian:
+    def _torque_derivative(self, kind: str) -> RowDerivative:
         p = self.problem
-        return RowHessian(lambda a, b, c: flat_torque(p.inertia, a, b, c), (3, 3, 3), 3, self.num_nodes)
+        return RowDerivative(lambda a, b, c: flat_torque(p.inertia, a, b, c), (3, 3, 3), 3, self.num_nodes, kind)
+
+    def _cone_derivatives(self, kind: str) -> tuple[RowDerivative, ...]:
+        rows = self.problem.path_interpolation.shape[0]
+        return tuple(RowDerivative(partial(cone_cosine, cone), (3,), 1, rows, kind) for cone in self.problem.cones)
 
     @cached_property
-    def _cone_hessians(self) -> tuple[RowHessian, ...]:
-        rows = self.problem.path_interpolation.shape[0]
-        return tuple(RowHessian(partial(cone_cosine, cone), (3,), 1, rows) for cone in self.problem.cones)
+    def _torque_partials(self) -> RowDerivative:
+        return self._torque_derivative("jacobian")
+
+    @cached_property
+    def _torque_hessian(self) -> RowDerivative:
+        return self._torque_derivative("hessian")
+
+    @cached_property
+    def _cone_jacobians(self) -> tuple[RowDerivative, ...]:
+        return self._cone_derivatives("jacobian")
+
+    @cached_property
+    def _cone_hessians(self) -> tuple[RowDerivative, ...]:
+        return self._cone_derivatives("hessian")
 
     @cached_property
     def _node_rows(self) -> np.ndarray:
         """:math:`S_k`: each node's angle, rate and acceleration (rows) from the node angles, ``(node, 3, node)``."""
         d1, d2 = self._scaled_differentiation
         return np.stack([np.eye(self.num_nodes), d1, d2], axis=1)
-
-
-class RowHessian:
-    """Exact Hessians of :math:`w_k \\cdot f(\\text{row } k)` for a row-wise numpy map ``f`` of arguments ``widths``
-    wide with ``outputs`` values, over ``rows`` rows at once.
-
-    ``f`` is evaluated once on one row of CasADi symbols (numpy's functions act on object arrays element by element,
-    so the program's own map is differentiated, not a second statement of it); CasADi's Hessian of the weighted sum
-    is then mapped over the rows. Called with the arguments stacked ``(rows, sum(widths))`` and the weights
-    ``(rows, outputs)``, it returns ``(rows, q, q)``. The mapped function is evaluated through buffers on numpy
-    memory (``Function.buffer``, made per call, so one instance may serve two threads): the same numbers as a call
-    with numpy arrays, without its conversions to and from CasADi matrices (two thirds of that call's time).
-    """
-
-    def __init__(self, f, widths: tuple[int, ...], outputs: int, rows: int) -> None:
-        args = [ca.SX.sym(f"a{i}", width) for i, width in enumerate(widths)]
-        values = ca.vertcat(*np.ravel(f(*(np.array([[a[j] for j in range(a.shape[0])]], dtype=object)
-                                         for a in args))))
-        stacked = ca.vertcat(*args)
-        self._size = stacked.shape[0]
-        self._shapes = [(rows, self._size), (rows, outputs)]
-
-        def mapped() -> ca.Function:
-            weights = ca.SX.sym("w", outputs)
-            hessian = ca.hessian(ca.dot(weights, values), stacked)[0]
-            return ca.Function("row_hessian", [stacked, weights], [ca.densify(hessian)]).map(rows)
-
-        # a slew solved again (a campaign's runs) differentiates nothing again: the process keeps the functions
-        self._mapped = DERIVATIVES.get(f"row_hessian_{rows}", [stacked], [values], mapped)
-
-    def __call__(self, inputs: np.ndarray, weights: np.ndarray) -> np.ndarray:
-        # CasADi stores column-major: row k of a C-ordered (rows, width) array is column k of its (width, rows) input
-        args = [np.ascontiguousarray(a, dtype=float) for a in (inputs, weights)]
-        if [a.shape for a in args] != self._shapes:  # the buffers are raw memory: no size is checked past here
-            raise ValueError(f"RowHessian: arguments of shapes {[a.shape for a in args]}, expected {self._shapes}")
-        out = np.empty((args[0].shape[0], self._size, self._size))  # column j of row k's Hessian at out[k, j]
-        buffer, evaluate = self._mapped.buffer()
-        for i, arg in enumerate(args):
-            buffer.set_arg(i, memoryview(arg))
-        buffer.set_res(0, memoryview(out))
-        evaluate()
-        return out.transpose(0, 2, 1)
 
 
 def _sandwiched(rows: np.ndarray, local: np.ndarray) -> np.ndarray:
