@@ -191,6 +191,11 @@ class _Layout:
         self.p_dst, self.p_dst_t = pi * n_c + pj, pj * n_c + pi
         self.slack_p = np.flatnonzero(~p_take)  # entries of P touching a slack: must stay zero
         self.slack_cols = np.flatnonzero(slack)
+        # every penalty, hinges first: its slack's column, row, entry in that row; its bound's row and entry
+        pens = (self.hinge, self.absolute)
+        self.pen_col, self.pen_row, self.pen_coef, self.pen_bound_row, self.pen_bound_coef = (
+            np.concatenate([getattr(pen, name) for pen in pens])
+            for name in ("col", "row", "coef", "bound_row", "bound_coef"))
 
     @staticmethod
     def _opposite(A: sp.csc_matrix, first: np.ndarray, second: np.ndarray, c: int, entry_col: np.ndarray) -> bool:
@@ -210,11 +215,9 @@ class _Layout:
             return "curvature on a penalty slack"
         if np.any(program.q[self.slack_cols] < 0):
             return "negative cost on a penalty slack"
-        if np.any(A.data[self.hinge.coef] >= 0) or np.any(A.data[self.absolute.coef] >= 0):
+        if np.any(A.data[self.pen_coef] >= 0):
             return "penalty slack with a nonnegative coefficient"
-        bounds = np.concatenate([self.hinge.bound_row, self.absolute.bound_row])
-        if np.any(program.b[bounds] != 0) or np.any(A.data[np.concatenate([self.hinge.bound_coef,
-                                                                            self.absolute.bound_coef])] >= 0):
+        if np.any(program.b[self.pen_bound_row] != 0) or np.any(A.data[self.pen_bound_coef] >= 0):
             return "penalty slack without its bound s >= 0"
         ab = self.absolute
         if ab.size:
@@ -337,13 +340,13 @@ class DaqpBackend(Backend):
         lower = -lower
         # penalties on v = a'x - b (core part of their rows), slopes lo < hi
         hinge, ab = lay.hinge, lay.absolute
-        c_pen = -data[np.concatenate([hinge.coef, ab.coef])]
-        q_pen = prog.q[np.concatenate([hinge.col, ab.col])]
+        c_pen = -data[lay.pen_coef]
+        q_pen = prog.q[lay.pen_col]
         hi = q_pen / c_pen
         lo = np.concatenate([np.zeros(hinge.size), -hi[hinge.size:]])
         pen0 = n_eq + n_in
         pen_rows = rows[pen0:]
-        b_pen = b[np.concatenate([hinge.row, ab.row])]
+        b_pen = b[lay.pen_row]
         high = -b_pen > 0  # v > 0 at x = 0
         if self._high is not None:
             high |= (b_pen == 0) & self._high

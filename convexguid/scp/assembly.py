@@ -129,20 +129,24 @@ class SubproblemRows:
         # the subproblem is solved for the scaled step d / scale, which keeps it well conditioned
         self._column_scale = np.concatenate([scale, np.ones(self.num_z - n)])
         self._a_data_scale = self._column_scale[np.repeat(np.arange(self.num_z), np.diff(pat.indptr))]
+        self._unit_scale = bool(np.all(scale == 1.0))  # the column scaling then changes no number
+        # the fixed entries of the softened rows, the slacks' bounds and the trust region
+        self._fixed = {"ineq": -np.ones(self.n_ineq), "eq": -np.ones(self.n_eq), "slack": -np.ones(self.n_slack),
+                       "box": (1.0 / scale, -1.0 / scale), "cone": -np.ones(self.n_cones)}
 
     def constraints(self, x: np.ndarray, ev: Evaluation, radius: float | np.ndarray, head: list[np.ndarray],
                     head_rhs: list[np.ndarray]) -> tuple[sp.csc_matrix, np.ndarray]:
         """``(A, b)`` about ``x`` (``radius``: the box on the scaled step, or its upper then lower limits per variable):
         ``head`` the values of the rows up to the output constraints' slacks (in pattern
         order), ``head_rhs`` their right-hand sides after ``A``'s and ``G``'s (which this fills in)."""
-        lin = self.linear
+        lin, fixed = self.linear, self._fixed
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
         A = self._a_pattern.matrix([
-            *head, *(_jacobian_data(b.jacobian) for b in ev.inequalities), -np.ones(self.n_ineq),
-            *jac_e, -np.ones(self.n_eq), *(-j for j in jac_e), -np.ones(self.n_eq), -np.ones(self.n_slack),
-            1.0 / self.scale, -1.0 / self.scale, *(-_jacobian_data(b.jacobian) for b in ev.cones),
-            -np.ones(self.n_cones)])
-        A.data *= self._a_data_scale
+            *head, *(_jacobian_data(b.jacobian) for b in ev.inequalities), fixed["ineq"],
+            *jac_e, fixed["eq"], *(-j for j in jac_e), fixed["eq"], fixed["slack"],
+            *fixed["box"], *(-_jacobian_data(b.jacobian) for b in ev.cones), fixed["cone"]])
+        if not self._unit_scale:
+            A.data *= self._a_data_scale
         room = lin.h - lin.G @ x
         # a hard inequality the iterate meets only to the backend's tolerance must not make d = 0 infeasible
         room[(room < 0) & (room > -1e-7 * (1 + np.abs(lin.h)))] = 0.0
