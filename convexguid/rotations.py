@@ -73,6 +73,19 @@ def cross3(a: NDArray, b: NDArray) -> NDArray:
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
+def cross_rows(a: NDArray, b: NDArray) -> NDArray:
+    """Cross products of stacked 3-vectors ``(..., 3)`` (broadcast; complex-safe): the products and differences of
+    ``np.cross``, in its order, so the same numbers, without its argument handling (which costs more than the
+    arithmetic on a few dozen rows)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape), dtype=np.result_type(a, b))
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    np.subtract(a1 * b2, a2 * b1, out=out[..., 0])
+    np.subtract(a2 * b0, a0 * b2, out=out[..., 1])
+    np.subtract(a0 * b1, a1 * b0, out=out[..., 2])
+    return out
+
+
 def skew(v: ArrayLike) -> NDArray:
     r"""Cross-product matrix :math:`[v\times]`, :math:`[v\times] u = v \times u`; shape ``(..., 3, 3)``."""
     v = _arr(v, 3)

@@ -273,3 +273,20 @@ def test_clarabel_checks_an_unbounded_verdict_again_at_unit_objective_scale():
     assert highs.status == 0
     assert program.objective(result.x) == pytest.approx(highs.fun, rel=1e-6)
     assert -program.b @ result.z == pytest.approx(highs.fun, rel=1e-6)  # the dual objective, unscaled
+
+
+def test_a_daqp_sibling_answers_as_a_backend_set_up_anew():
+    """A sibling takes the layout over, not the warm start: on the next program it gives a fresh backend's answer,
+    bitwise, its objective exactly the program's; a program of another structure gets none."""
+    first = make_backend("daqp", penalized_qp(0), tolerance=1e-9, fallback="clarabel")
+    first.solve()
+    program = penalized_qp(3, penalty=10.0)
+    sibling = first.sibling(program)
+    assert sibling is not None and sibling.primary._layout is first.primary._layout
+    ours, fresh = sibling.solve(), make_backend("daqp", program, tolerance=1e-9).solve()
+    assert ours.status == fresh.status == "optimal" and ours.exact_objective
+    np.testing.assert_array_equal(ours.x, fresh.x)
+    np.testing.assert_array_equal(ours.z, fresh.z)
+    shifted = ConicProgram(program.P, program.q, program.A, program.b, program.cones, constant=1.5)
+    assert ours.objective + 1.5 == shifted.objective(ours.x)
+    assert first.sibling(small_qp()) is None

@@ -121,3 +121,15 @@ def test_lagrangian_hessian_from_local_hessians_matches_differences():
         differenced = differenced_hessian(program, x, weights, np.ones(program.num_variables))
         local = program.lagrangian_hessian(x, weights)
         assert np.abs(local - differenced).max() <= 1e-6 * np.abs(differenced).max()
+
+
+def test_jacobians_added_to_an_evaluation_are_those_of_a_whole_evaluation():
+    """with_jacobians (the engine's second look at an accepted trial point) gives evaluate's numbers, bitwise."""
+    program = FlatAttitudeProgram(build_problem(load_problem(Path("problems/cai2018_flat_attitude_sun_active.yaml"))))
+    x = program.initial_guess() + 0.01 * np.random.default_rng(0).normal(size=program.num_variables)
+    whole, added = program.evaluate(x), program.with_jacobians(x, program.evaluate(x, jacobians=False))
+    np.testing.assert_array_equal(added.residual_jacobian, whole.residual_jacobian)
+    for a, b in zip(added.inequalities, whole.inequalities, strict=True):
+        assert a.name == b.name
+        np.testing.assert_array_equal(a.values, b.values)
+        np.testing.assert_array_equal(a.jacobian, b.jacobian)

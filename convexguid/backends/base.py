@@ -83,6 +83,9 @@ class BackendResult:
     primal_residual: float
     dual_residual: float
     z: np.ndarray | None = None
+    exact_objective: bool = False
+    """``objective`` is :meth:`ConicProgram.objective` at ``x`` less the constant, evaluated as that method does
+    (the dense backend's own check of its answer), so a caller need not evaluate it a second time."""
 
     @property
     def usable(self) -> bool:
@@ -105,15 +108,24 @@ class Backend(ABC):
                          program.A.indptr.copy(), program.A.indices.copy(), program.cones)
         self._setup(program)
 
-    def update(self, program: ConicProgram) -> None:
-        """Replace the numbers of the program; the sparsity pattern must not change."""
+    def same_pattern(self, program: ConicProgram) -> bool:
+        """Whether ``program`` has the cones and the sparsity pattern of this backend's first program."""
         P_ptr, P_idx, A_ptr, A_idx, cones = self._pattern
-        same = (program.cones == cones and np.array_equal(program.P.indptr, P_ptr)
+        return (program.cones == cones and np.array_equal(program.P.indptr, P_ptr)
                 and np.array_equal(program.A.indptr, A_ptr) and np.array_equal(program.P.indices, P_idx)
                 and np.array_equal(program.A.indices, A_idx))
-        if not same:
+
+    def update(self, program: ConicProgram) -> None:
+        """Replace the numbers of the program; the sparsity pattern must not change."""
+        if not self.same_pattern(program):
             raise ValueError(f"backend {self.name}: update() needs the sparsity pattern of the first program")
         self._update(program)
+
+    def sibling(self, program: ConicProgram) -> Backend | None:
+        """A second backend of this kind and settings for ``program`` (a program of the same pattern and
+        structure, solved alongside: the end game's curved subproblem), with a warm start of its own and whatever
+        this one read from the pattern taken over; ``None`` when that is not possible (set one up anew)."""
+        return None
 
     @abstractmethod
     def _setup(self, program: ConicProgram) -> None: ...

@@ -36,6 +36,7 @@ duality gap (``optimal`` within the tolerance, ``optimal_inaccurate`` within
 
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import dataclass
 
@@ -105,8 +106,9 @@ class _Layout:
         entry_row = A.indices
         row_len = np.bincount(entry_row, minlength=n_rows)
         singleton = (row_len == 1) & (np.arange(n_rows) >= nz)
-        # entries of each row (CSR order over positions in A.data)
-        by_row = np.lexsort((entry_col, entry_row))
+        # entries of each row (CSR order over positions in A.data): A is canonical CSC, so a stable sort by row
+        # alone keeps each row's entries by column (the order np.lexsort((entry_col, entry_row)) gives)
+        by_row = np.argsort(entry_row, kind="stable")
         row_ptr = np.concatenate([[0], np.cumsum(row_len)])
 
         def row_entries(i: int) -> np.ndarray:
@@ -189,6 +191,11 @@ class _Layout:
         self.p_dst, self.p_dst_t = pi * n_c + pj, pj * n_c + pi
         self.slack_p = np.flatnonzero(~p_take)  # entries of P touching a slack: must stay zero
         self.slack_cols = np.flatnonzero(slack)
+        # every penalty, hinges first: its slack's column, row, entry in that row; its bound's row and entry
+        pens = (self.hinge, self.absolute)
+        self.pen_col, self.pen_row, self.pen_coef, self.pen_bound_row, self.pen_bound_coef = (
+            np.concatenate([getattr(pen, name) for pen in pens])
+            for name in ("col", "row", "coef", "bound_row", "bound_coef"))
 
     @staticmethod
     def _opposite(A: sp.csc_matrix, first: np.ndarray, second: np.ndarray, c: int, entry_col: np.ndarray) -> bool:
@@ -208,11 +215,9 @@ class _Layout:
             return "curvature on a penalty slack"
         if np.any(program.q[self.slack_cols] < 0):
             return "negative cost on a penalty slack"
-        if np.any(A.data[self.hinge.coef] >= 0) or np.any(A.data[self.absolute.coef] >= 0):
+        if np.any(A.data[self.pen_coef] >= 0):
             return "penalty slack with a nonnegative coefficient"
-        bounds = np.concatenate([self.hinge.bound_row, self.absolute.bound_row])
-        if np.any(program.b[bounds] != 0) or np.any(A.data[np.concatenate([self.hinge.bound_coef,
-                                                                            self.absolute.bound_coef])] >= 0):
+        if np.any(program.b[self.pen_bound_row] != 0) or np.any(A.data[self.pen_bound_coef] >= 0):
             return "penalty slack without its bound s >= 0"
         ab = self.absolute
         if ab.size:
@@ -246,14 +251,25 @@ class DaqpBackend(Backend):
 
         if program.cones.soc:
             raise BackendError("backend 'daqp' cannot take second-order cones; use 'clarabel'")
-        program = _canonical(program)
-        self._layout = _Layout(program)
-        self._program = program
+        canonical = _canonical(program)
+        self._layout = _Layout(canonical)
+        self._program, self._as_given = canonical, canonical is program  # as given: its objective is ours
         self._high: np.ndarray | None = None  # the piece of every penalty at the last solution
         self._lam: np.ndarray | None = None  # DAQP's multipliers at the last solution
 
     def _update(self, program: ConicProgram) -> None:
         self._program = _canonical(program)
+        self._as_given = self._program is program
+
+    def sibling(self, program: ConicProgram) -> DaqpBackend | None:
+        """This backend's layout for ``program`` of the same pattern, when the program has its structure (the
+        check every solve makes), with no warm start: reading the layout again costs as much as a few solves."""
+        if not self.same_pattern(program) or self._layout.check(_canonical(program)):
+            return None
+        twin = copy.copy(self)
+        twin._update(program)
+        twin._high = twin._lam = None
+        return twin
 
     def solve(self) -> BackendResult:
         start = time.perf_counter()
@@ -271,7 +287,7 @@ class DaqpBackend(Backend):
             return BackendResult(status, None, float("nan"), iterations, time.perf_counter() - start,
                                  float("nan"), float("nan"))
         px = prog.hessian_times(x)
-        objective = float(0.5 * x @ px + prog.q @ x)
+        objective = float(0.5 * x @ px + prog.q @ x)  # ConicProgram.objective's sum, less the constant
         s = prog.b - prog.A @ x
         nz = prog.cones.zero
         primal = max(float(np.max(np.abs(s[:nz]), initial=0.0)), float(np.max(-s[nz:], initial=0.0)))
@@ -280,7 +296,7 @@ class DaqpBackend(Backend):
         status = self._grade(prog, objective, primal, dual, gap)
         elapsed = time.perf_counter() - start
         return BackendResult(status, x if status != "failed" else None, objective, iterations, elapsed, primal,
-                             dual, z if status != "failed" else None)
+                             dual, z if status != "failed" else None, exact_objective=self._as_given)
 
     def _grade(self, prog: ConicProgram, objective: float, primal: float, dual: float, gap: float) -> str:
         """``optimal`` when the residuals meet the tolerance, relative to the data (as Clarabel measures them)."""
@@ -324,13 +340,13 @@ class DaqpBackend(Backend):
         lower = -lower
         # penalties on v = a'x - b (core part of their rows), slopes lo < hi
         hinge, ab = lay.hinge, lay.absolute
-        c_pen = -data[np.concatenate([hinge.coef, ab.coef])]
-        q_pen = prog.q[np.concatenate([hinge.col, ab.col])]
+        c_pen = -data[lay.pen_coef]
+        q_pen = prog.q[lay.pen_col]
         hi = q_pen / c_pen
         lo = np.concatenate([np.zeros(hinge.size), -hi[hinge.size:]])
         pen0 = n_eq + n_in
         pen_rows = rows[pen0:]
-        b_pen = b[np.concatenate([hinge.row, ab.row])]
+        b_pen = b[lay.pen_row]
         high = -b_pen > 0  # v > 0 at x = 0
         if self._high is not None:
             high |= (b_pen == 0) & self._high

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import importlib.util
 import time
 from functools import cache
@@ -111,6 +112,15 @@ class FallbackBackend(Backend):
 
     def _setup(self, program: ConicProgram) -> None:
         self._program = program
+
+    def sibling(self, program: ConicProgram) -> FallbackBackend | None:
+        """The primary's sibling (:meth:`Backend.sibling`) with the same fallback, set up at its first use."""
+        primary = self.primary.sibling(program)
+        if primary is None:
+            return None
+        twin = copy.copy(self)
+        twin.primary, twin.secondary, twin.fallbacks, twin._program = primary, None, 0, program
+        return twin
 
     def _update(self, program: ConicProgram) -> None:
         self._program = program

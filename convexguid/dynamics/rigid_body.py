@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from convexguid.rotations import quat_derivative
+from convexguid.rotations import cross_rows, quat_derivative
 
 
 def euler_torque(inertia: np.ndarray, omega: np.ndarray, omega_dot: np.ndarray) -> np.ndarray:
@@ -22,7 +22,7 @@ def euler_torque(inertia: np.ndarray, omega: np.ndarray, omega_dot: np.ndarray) 
     Vectorised over a leading axis; accepts complex input (for complex-step derivatives).
     """
     i_omega = omega @ inertia.T
-    return omega_dot @ inertia.T + np.cross(omega, i_omega)
+    return omega_dot @ inertia.T + cross_rows(omega, i_omega)
 
 
 def rigid_body_rhs(inertia: np.ndarray, torque: Callable[[float], np.ndarray]

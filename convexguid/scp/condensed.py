@@ -40,7 +40,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import ConicProgram
-from convexguid.scp.assembly import SubproblemRows, _jacobian_data
+from convexguid.scp.assembly import SubproblemRows, _jacobian_data, csc_index_arrays
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
 
 
@@ -72,9 +72,10 @@ class CondensedAssembler(SubproblemRows):
         order = np.lexsort((self._p_rows, self._p_cols))
         self._p_rows, self._p_cols = self._p_rows[order], self._p_cols[order]
         counts = np.bincount(self._p_cols, minlength=self.num_z)
-        self._p_indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self._p_indices = self._p_rows.astype(np.int64)
+        self._p_indices, self._p_indptr = csc_index_arrays(self._p_rows, np.concatenate([[0], np.cumsum(counts)]),
+                                                           (self.num_z, self.num_z))
         self._cost_u = np.asarray(linear_cost, dtype=float) * scale
+        self._p_flat = self._p_rows * n + self._p_cols  # the upper triangle's entries in the dense Hessian, CSC order
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
               hessian: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
@@ -100,7 +101,7 @@ class CondensedAssembler(SubproblemRows):
             np.add.at(hess, (cols[off], rows[off]), entries[off])
         if curved is not None:
             hess = curved.hessian
-        P = sp.csc_matrix((hess[self._p_rows, self._p_cols], self._p_indices, self._p_indptr),
+        P = sp.csc_matrix((hess.ravel()[self._p_flat], self._p_indices, self._p_indptr),
                           shape=(self.num_z, self.num_z))
         q = np.full(self.num_z, float(penalty))
         q[:n] = 2.0 * (WJ.T @ r) + self._cost_u

@@ -192,9 +192,15 @@ class CurvedSubproblem:
         algo = self.algo
         linear = algo.second_order.linear
         if self.assembler is None:
-            self.assembler = CondensedAssembler(algo.program.num_variables, state.raw, linear, algo.outputs,
-                                                algo.scale, algo.cost, algo.weights)
+            # the run's own condensed subproblem has these rows and this pattern (its curvature model is not used
+            # here: ``curved`` replaces the whole Hessian), so it is shared rather than set up a second time
+            self.assembler = algo.assembler if isinstance(algo.assembler, CondensedAssembler) else \
+                CondensedAssembler(algo.program.num_variables, state.raw, linear, algo.outputs, algo.scale,
+                                   algo.cost, algo.weights)
         values = model.working.values(ev, linear, algo.outputs, state.x)
         program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty, curved=model.terms(values))
-        self.backend, result, value = algo.solved(state, program_k, self.backend, *self.backend_name())
+        name, fallback = self.backend_name()
+        # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
+        like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
+        self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)
         return result, value

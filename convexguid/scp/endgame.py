@@ -161,10 +161,9 @@ class SecondOrderModels:
 
     def at(self, x: np.ndarray, raw: Evaluation, multipliers: Multipliers, working: WorkingSet) -> LocalModel:
         """The model at ``x`` (``raw``: the program's evaluation there, with Jacobians) on ``working``."""
-        omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs.M)
-        curvature = sp.csr_matrix(self.hessian(x, CurvatureWeights(omega, multipliers.inequality,
-                                                                   multipliers.equality)))
-        hessian = self.gauss_newton(raw) + curvature.multiply(np.outer(self.scale, self.scale)).toarray()
+        omega = multipliers.residual_weights(raw.residuals, self.weights, self.outputs)
+        curvature = self.hessian(x, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
+        hessian = self.gauss_newton(raw) + _scaled_dense(curvature, self.scale)
         gradient = objective_gradient(raw, self.weights, self.cost)
         rows = working.rows(raw, self.linear, self.outputs) * self.scale
         return LocalModel(hessian, gradient * self.scale, working, rows,
@@ -205,6 +204,15 @@ def linearized_violation(raw: Evaluation, outputs: OutputConstraints, d: np.ndar
     for cone in raw.cones:  # affine: its value after the step is exact
         total += float(cone.violations(cone.values + cone.jacobian @ d).sum())
     return total
+
+
+def _scaled_dense(curvature: np.ndarray | sp.spmatrix, scale: np.ndarray) -> np.ndarray:
+    """:math:`S \\nabla^2 S` as a dense array, each entry times :math:`\\sigma_i \\sigma_j`: a sparse Hessian entry by
+    entry, a dense one as it is (no round trip through a sparse matrix)."""
+    outer = np.outer(scale, scale)
+    if sp.issparse(curvature):
+        return sp.csr_matrix(curvature).multiply(outer).toarray()
+    return np.asarray(curvature, dtype=float) * outer
 
 
 def _csr(matrix):

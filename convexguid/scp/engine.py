@@ -56,6 +56,7 @@ from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
 from convexguid.scp.endgame import SecondOrderModels, linearized_violation
+from convexguid.scp.evaluations import ProgramEvaluations
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, has_jacobian
 from convexguid.scp.merit import (
     decrease_ratio,
@@ -123,6 +124,7 @@ class SCPAlgorithm:
         self.outputs = program.output_constraints()
         self.linear = program.linear_constraints()  # fixed for the run: read once
         self.scale = program.variable_scale()
+        self.evaluations = ProgramEvaluations(program)
         guarded = getattr(program, "guarded_bounds", None)
         self.guarded = guarded() if guarded is not None else None
         model = getattr(program, "curvature_model", None)
@@ -139,7 +141,7 @@ class SCPAlgorithm:
         """The program's own evaluation, and one that also lists the output constraints' values and the cones'
         violations (what the merit function and the reports count)."""
         t = time.perf_counter()
-        raw = self.program.evaluate(x, jacobians)
+        raw = self.evaluations(x, jacobians)
         ev = replace(raw, inequalities=self.outputs.blocks_at(raw.residuals) + raw.inequalities
                      + tuple(cone.as_inequality() for cone in raw.cones))
         if state is not None:
@@ -215,9 +217,12 @@ class SCPAlgorithm:
         return self.trust_region.box(state.radius, state.x, self.scale, self.guarded)
 
     def solved(self, state: IterationState, program_k: ConicProgram, backend: Backend | None, name: str,
-               fallback: str | None = None) -> tuple[Backend, BackendResult, float]:
-        """``program_k`` solved by ``backend`` (made at the first call from ``name`` and ``fallback``, then only
-        updated), its time counted; returns the backend, its answer and the model's merit after the step."""
+               fallback: str | None = None, like: Backend | None = None) -> tuple[Backend, BackendResult, float]:
+        """``program_k`` solved by ``backend`` (made at the first call from ``name`` and ``fallback``, or as the
+        sibling of ``like``, a backend of that name on the same pattern; then only updated), its time counted;
+        returns the backend, its answer and the model's merit after the step."""
+        if backend is None and like is not None:
+            backend = like.sibling(program_k)  # set for program_k: the update below only repeats it
         if backend is None:
             backend = make_backend(name, program_k, self.settings.backend_tolerance, fallback=fallback,
                                    iterative_refinement=self.settings.iterative_refinement)
@@ -225,8 +230,10 @@ class SCPAlgorithm:
             backend.update(program_k)
         result = backend.solve()
         state.solver_time_s += result.solve_time_s
-        model = program_k.objective(result.x) + self.cost @ state.x if result.usable else float("nan")
-        return backend, result, model
+        if not result.usable:
+            return backend, result, float("nan")
+        value = result.objective + program_k.constant if result.exact_objective else program_k.objective(result.x)
+        return backend, result, value + self.cost @ state.x
 
     def record(self, state: IterationState, step: float, ratio: float, accepted: bool,
                result: BackendResult) -> None:
@@ -384,7 +391,7 @@ class SCPAlgorithm:
         """The program's convex curvature model at the iterate, weighted by the state's multipliers."""
         m = state.multipliers
         t = time.perf_counter()
-        omega = m.residual_weights(state.raw.residuals, self.weights, self.outputs.M)
+        omega = m.residual_weights(state.raw.residuals, self.weights, self.outputs)
         values = self.curvature.values(state.x, CurvatureWeights(omega, m.inequality, m.equality))
         state.convexify_time_s += time.perf_counter() - t
         return values

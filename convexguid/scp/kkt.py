@@ -66,7 +66,7 @@ def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, w
                   cost: np.ndarray, linear: LinearConstraints, outputs: OutputConstraints, scale: np.ndarray,
                   objective: float, objective_at_start: float, feasibility: float) -> KKTResiduals:
     """The KKT residuals of the program at ``x`` (``raw``: its evaluation there, with Jacobians)."""
-    omega = multipliers.residual_weights(raw.residuals, weights, outputs.M)
+    omega = multipliers.residual_weights(raw.residuals, weights, outputs)
     gradient = cost + lagrangian_gradient(raw, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
     A, G = linear.A, linear.G  # dense or sparse, as the program gives them
     if A.shape[0]:

@@ -63,9 +63,9 @@ class Multipliers:
         everything = np.concatenate([self.linear_inequality, self.output, self.inequality, self.equality, [0.0]])
         return 1e-6 * max(float(np.max(np.abs(everything))), 1e-300)
 
-    def residual_weights(self, residuals: np.ndarray, weights: np.ndarray, outputs_M: sp.spmatrix) -> np.ndarray:
+    def residual_weights(self, residuals: np.ndarray, weights: np.ndarray, outputs: OutputConstraints) -> np.ndarray:
         """:math:`\\omega = 2 W r + M^T \\nu`: the weight of each residual's curvature in the Lagrangian."""
-        return 2.0 * weights * residuals + (outputs_M.T @ self.output if self.output.size else 0.0)
+        return 2.0 * weights * residuals + (outputs.transposed @ self.output if self.output.size else 0.0)
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Protocol
 
 import numpy as np
@@ -139,6 +140,13 @@ class OutputConstraints:
     def none(cls, num_residuals: int) -> OutputConstraints:
         return cls(sp.csr_matrix((0, num_residuals)), np.zeros(0), ())
 
+    @cached_property
+    def transposed(self) -> sp.csr_matrix:
+        """:math:`M^T` as CSR, made once: the multipliers' weight on the residuals, :math:`M^T \\nu`, is asked for at
+        every iteration, and a transposed view of ``M`` made each time cost more than the product (the same sums,
+        in the same order)."""
+        return sp.csr_matrix(self.M.T)
+
     def blocks_at(self, residuals: np.ndarray) -> tuple[ConstraintBlock, ...]:
         """The constraint values ``M r - m`` split into named blocks (no Jacobians: they are linear in r)."""
         values = self.M @ residuals - self.m
@@ -183,6 +191,9 @@ class NonconvexProgram(Protocol):
     trust region, and the problem is solved by one convex program and confirmed by the next).
     ``guarded_bounds() -> (lower, upper)``: bounds of variables whose maps lose their meaning beyond them; the steps
     keep short of them until nearly met (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`).
+    ``with_jacobians(x, values) -> Evaluation``: ``values`` (``evaluate(x, jacobians=False)``) with the Jacobians at
+    ``x`` added, the same as ``evaluate(x)``: the engine then does not compute the maps twice at a trial point it
+    accepts.
     """
 
     num_variables: int

@@ -29,17 +29,15 @@ planning for space vehicles under multiple constraints", J. Dynamics and Control
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property, partial
 
-import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
 from convexguid.dynamics.rigid_body import euler_torque
-from convexguid.families.flat_attitude.complex_step import pointwise_jacobian, pointwise_jacobians
+from convexguid.families.flat_attitude.row_derivatives import RowDerivative
 from convexguid.geometry import PointingCone
-from convexguid.ocp.parts import DERIVATIVES
 from convexguid.rotations import euler321_body_rates, euler321_rates_from_body, euler321_to_dcm
 from convexguid.scp.problem import (
     ConstraintBlock,
@@ -193,38 +191,48 @@ class FlatAttitudeProgram:
                                  (OutputBlock("torque_Nm", slice(0, 2 * rows), "N m"),))
 
     def _torque_jacobian(self, z: np.ndarray, zd: np.ndarray, zdd: np.ndarray) -> np.ndarray:
-        """Torque Jacobian from complex-step local partials :math:`A_k, B_k, C_k` of eq. (12).
+        """Torque Jacobian from the local partials :math:`A_k, B_k, C_k` of eq. (12) (exact: CasADi's of the same map).
 
         .. math:: \\partial u_k/\\partial\\zeta_j = A_k\\delta_{kj} + s B_k D_{kj} + s^2 C_k D^{(2)}_{kj}
         """
-        p, s = self.problem, self.problem.time_scale
-
-        def torque(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-            return flat_torque(p.inertia, a, b, c)
-
-        local = pointwise_jacobians(torque, (z, zd, zdd))
-        jac = np.einsum("kab,kj->kajb", local[1], s * p.grid.d1)
-        jac += np.einsum("kab,kj->kajb", local[2], s * s * p.grid.d2)
+        partials = self._torque_partials(np.hstack([z, zd, zdd]))
+        local = [partials[:, :, 3 * i: 3 * i + 3] for i in range(3)]
+        d1, d2 = self._scaled_differentiation
+        # jac[k, a, j, b]: each entry one product (the outer products einsum("kab,kj->kajb") forms, broadcast)
+        jac = local[1][:, :, None, :] * d1[:, None, :, None]
+        jac += local[2][:, :, None, :] * d2[:, None, :, None]
         idx = np.arange(self.num_nodes)
         jac[idx, :, idx, :] += local[0]
         return jac.reshape(self.num_variables, self.num_variables)
+
+    @cached_property
+    def _scaled_differentiation(self) -> tuple[np.ndarray, np.ndarray]:
+        """:math:`s D` and :math:`s^2 D^{(2)}`: the rates and accelerations at the nodes from the angles (eq. 23)."""
+        p, s = self.problem, self.problem.time_scale
+        return s * p.grid.d1, s * s * p.grid.d2
 
     def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation:
         p = self.problem
         z, zd, zdd = p.flat_derivatives(x)
         u = flat_torque(p.inertia, z, zd, zdd)
+        z_path = p.path_interpolation @ z
+        blocks = tuple(ConstraintBlock(f"keep_out_{cone.name}", cone_cosine(cone, z_path)
+                                       - np.cos(cone.half_angle_rad + p.cone_margin_rad), None, "cos")
+                       for cone in p.cones)
+        values = Evaluation(u.ravel(), None, blocks)
+        return self.with_jacobians(x, values) if jacobians else values
+
+    def with_jacobians(self, x: np.ndarray, values: Evaluation) -> Evaluation:
+        """``values`` (:meth:`evaluate` at ``x`` without Jacobians) with the torque's and the cones' Jacobians."""
+        p = self.problem
+        z, zd, zdd = p.flat_derivatives(x)
         path = p.path_interpolation
-        jac_u = self._torque_jacobian(z, zd, zdd) if jacobians else None
-        blocks = []
         z_path = path @ z
-        for cone in p.cones:
-            values = cone_cosine(cone, z_path) - np.cos(cone.half_angle_rad + p.cone_margin_rad)
-            jac = None
-            if jacobians:
-                local = pointwise_jacobian(partial(cone_cosine, cone), (z_path,), 0)
-                jac = (local[:, None, :] * path[:, :, None]).reshape(path.shape[0], -1)
-            blocks.append(ConstraintBlock(f"keep_out_{cone.name}", values, jac, "cos"))
-        return Evaluation(u.ravel(), jac_u, tuple(blocks))
+        blocks = []
+        for jacobian, block in zip(self._cone_jacobians, values.inequalities, strict=True):
+            local = jacobian(z_path)[:, 0, :]
+            blocks.append(replace(block, jacobian=(local[:, None, :] * path[:, :, None]).reshape(path.shape[0], -1)))
+        return replace(values, residual_jacobian=self._torque_jacobian(z, zd, zdd), inequalities=tuple(blocks))
 
     def lagrangian_hessian(self, x: np.ndarray, weights) -> np.ndarray:
         """The curvature :math:`\\sum_k \\omega_k^T \\nabla^2 u_k + \\sum_p \\mu_p \\nabla^2 c_p` of the torques
@@ -234,73 +242,64 @@ class FlatAttitudeProgram:
         design vector (:math:`S_k` the node's row of the identity, of :math:`s D` and of :math:`s^2 D^{(2)}`), so
         :math:`\\nabla^2 (\\omega_k^T u_k) = S_k^T G_k S_k` with :math:`G_k` the 9 x 9 Hessian of
         :math:`\\omega_k^T \\Gamma_u`; likewise each cone at a path point through the interpolation row. The local
-        Hessians are exact (:class:`RowHessian`: CasADi's second derivatives of the same maps)."""
+        Hessians are exact (:class:`RowDerivative`: CasADi's second derivatives of the same maps)."""
         p, n1 = self.problem, self.num_nodes
         z, zd, zdd = p.flat_derivatives(x)
         omega = np.asarray(weights.residual, dtype=float).reshape(n1, 3)
         local = self._torque_hessian(np.hstack([z, zd, zdd]), omega)
-        T = self._node_maps  # (node, 9, variables): S_k with each row for the three components
-        H = np.einsum("kab,kbj->kaj", local, T).reshape(-1, self.num_variables)
-        H = T.reshape(-1, self.num_variables).T @ H
+        H = _sandwiched(self._node_rows, local)
         path = p.path_interpolation
         z_path, start = path @ z, 0
         for hessian in self._cone_hessians:
             mu = np.asarray(weights.inequality[start: start + path.shape[0]], dtype=float)
             start += path.shape[0]
             if np.any(mu):
-                cone_local = hessian(z_path, mu[:, None])
-                P = np.kron(path, np.eye(3)).reshape(path.shape[0], 3, self.num_variables)
-                H += P.reshape(-1, self.num_variables).T @ np.einsum("pab,pbj->paj", cone_local, P).reshape(
-                    -1, self.num_variables)
+                H += _sandwiched(path[:, None, :], hessian(z_path, mu[:, None]))
         return 0.5 * (H + H.T)
 
-    @cached_property
-    def _torque_hessian(self) -> RowHessian:
+    def _torque_derivative(self, kind: str) -> RowDerivative:
         p = self.problem
-        return RowHessian(lambda a, b, c: flat_torque(p.inertia, a, b, c), (3, 3, 3), 3, self.num_nodes)
+        return RowDerivative(lambda a, b, c: flat_torque(p.inertia, a, b, c), (3, 3, 3), 3, self.num_nodes, kind)
 
-    @cached_property
-    def _cone_hessians(self) -> tuple[RowHessian, ...]:
+    def _cone_derivatives(self, kind: str) -> tuple[RowDerivative, ...]:
         rows = self.problem.path_interpolation.shape[0]
-        return tuple(RowHessian(partial(cone_cosine, cone), (3,), 1, rows) for cone in self.problem.cones)
+        return tuple(RowDerivative(partial(cone_cosine, cone), (3,), 1, rows, kind) for cone in self.problem.cones)
 
     @cached_property
-    def _node_maps(self) -> np.ndarray:
-        """:math:`S_k \\otimes I_3`: each node's angles, rates and accelerations (rows) from the design vector."""
-        p, n1 = self.problem, self.num_nodes
-        s = p.time_scale
-        rows = np.stack([np.eye(n1), s * p.grid.d1, s * s * p.grid.d2], axis=1)  # (node, role, node)
-        return np.kron(rows.reshape(n1 * 3, n1), np.eye(3)).reshape(n1, 9, self.num_variables)
+    def _torque_partials(self) -> RowDerivative:
+        return self._torque_derivative("jacobian")
+
+    @cached_property
+    def _torque_hessian(self) -> RowDerivative:
+        return self._torque_derivative("hessian")
+
+    @cached_property
+    def _cone_jacobians(self) -> tuple[RowDerivative, ...]:
+        return self._cone_derivatives("jacobian")
+
+    @cached_property
+    def _cone_hessians(self) -> tuple[RowDerivative, ...]:
+        return self._cone_derivatives("hessian")
+
+    @cached_property
+    def _node_rows(self) -> np.ndarray:
+        """:math:`S_k`: each node's angle, rate and acceleration (rows) from the node angles, ``(node, 3, node)``."""
+        d1, d2 = self._scaled_differentiation
+        return np.stack([np.eye(self.num_nodes), d1, d2], axis=1)
 
 
-class RowHessian:
-    """Exact Hessians of :math:`w_k \\cdot f(\\text{row } k)` for a row-wise numpy map ``f`` of arguments ``widths``
-    wide with ``outputs`` values, over ``rows`` rows at once.
-
-    ``f`` is evaluated once on one row of CasADi symbols (numpy's functions act on object arrays element by element,
-    so the program's own map is differentiated, not a second statement of it); CasADi's Hessian of the weighted sum
-    is then mapped over the rows. Called with the arguments stacked ``(rows, sum(widths))`` and the weights
-    ``(rows, outputs)``, it returns ``(rows, q, q)``.
-    """
-
-    def __init__(self, f, widths: tuple[int, ...], outputs: int, rows: int) -> None:
-        args = [ca.SX.sym(f"a{i}", width) for i, width in enumerate(widths)]
-        values = ca.vertcat(*np.ravel(f(*(np.array([[a[j] for j in range(a.shape[0])]], dtype=object)
-                                         for a in args))))
-        stacked = ca.vertcat(*args)
-        self._size = stacked.shape[0]
-
-        def mapped() -> ca.Function:
-            weights = ca.SX.sym("w", outputs)
-            hessian = ca.hessian(ca.dot(weights, values), stacked)[0]
-            return ca.Function("row_hessian", [stacked, weights], [ca.densify(hessian)]).map(rows)
-
-        # a slew solved again (a campaign's runs) differentiates nothing again: the process keeps the functions
-        self._mapped = DERIVATIVES.get(f"row_hessian_{rows}", [stacked], [values], mapped)
-
-    def __call__(self, inputs: np.ndarray, weights: np.ndarray) -> np.ndarray:
-        out = self._mapped(np.asarray(inputs, dtype=float).T, np.asarray(weights, dtype=float).T).full()
-        return out.reshape(self._size, -1, self._size).transpose(1, 0, 2)
+def _sandwiched(rows: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """:math:`\\sum_k (S_k \\otimes I_3)^T G_k (S_k \\otimes I_3)` for maps :math:`S_k` ``rows`` ``(k, q, n)`` of the
+    node angles and local Hessians :math:`G_k` ``local`` ``(k, 3q, 3q)`` (index: row of :math:`S_k` times 3 plus
+    axis); the design vector is the node angles, node-major. The Kronecker factor's zeros are never multiplied:
+    :math:`W_k = G_k (S_k \\otimes I_3)` per node, then one product over nodes and rows, a third of the work of
+    the Kronecker form."""
+    k, q, n = rows.shape
+    # W[k, (r, a, b), j] = sum_t G_k[(r, a), (t, b)] S_k[t, j]
+    per_row = local.reshape(k, q, 3, q, 3).transpose(0, 1, 2, 4, 3).reshape(k, 9 * q, q) @ rows
+    # H[i, (a, b, j)] = sum_{k, r} S_k[r, i] W[k, (r, a, b), j]
+    H = rows.reshape(k * q, n).T @ per_row.reshape(k * q, 9 * n)
+    return H.reshape(n, 3, 3, n).transpose(0, 1, 3, 2).reshape(3 * n, 3 * n)
 
 
 def build_problem(spec) -> FlatAttitudeProblem:

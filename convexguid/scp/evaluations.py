@@ -1,0 +1,39 @@
+"""The program's evaluations as the engine asks for them: a trial point's maps are not computed twice.
+
+Each iteration evaluates its trial points without Jacobians (the merit needs values only), then the one it accepts
+with them. A program that offers ``with_jacobians(x, values)`` (see :class:`~convexguid.scp.problem.NonconvexProgram`)
+then only adds the Jacobians to the evaluation it already made there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from convexguid.scp.problem import Evaluation, NonconvexProgram
+
+MAX_TRIALS_KEPT = 8
+"""Trial points of one iteration whose evaluations are kept (an iteration tries at most four: the step, Newton's,
+and a second-order correction of each)."""
+
+
+class ProgramEvaluations:
+    """``program.evaluate(x, jacobians)``, keeping the evaluations without Jacobians made since the last one with
+    them; at one of those points (the same array, its values unchanged) a program with ``with_jacobians`` only adds
+    them. The same numbers either way."""
+
+    def __init__(self, program: NonconvexProgram) -> None:
+        self.program = program
+        self._complete = getattr(program, "with_jacobians", None)
+        self._trials: list[tuple[np.ndarray, np.ndarray, Evaluation]] = []  # (point, its copy, evaluation)
+
+    def __call__(self, x: np.ndarray, jacobians: bool) -> Evaluation:
+        if not jacobians:
+            raw = self.program.evaluate(x, False)
+            if self._complete is not None and len(self._trials) < MAX_TRIALS_KEPT:
+                self._trials.append((x, x.copy(), raw))
+            return raw
+        trials, self._trials = self._trials, []
+        for point, copy, raw in trials:
+            if point is x and np.array_equal(copy, x):
+                return self._complete(x, raw)
+        return self.program.evaluate(x, True)
