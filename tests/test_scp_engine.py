@@ -24,6 +24,7 @@ from scipy.optimize import minimize
 import convexguid.scp.engine as engine
 from convexguid.backends import BackendResult, available_backends
 from convexguid.scp.engine import solve_scp
+from convexguid.scp.policies import PenaltyPolicy
 from convexguid.scp.problem import (
     ConstraintBlock,
     Evaluation,
@@ -498,3 +499,13 @@ def test_phase_one_stops_at_the_first_point_well_inside_the_feasibility_toleranc
     assert accepted[-1] <= engine.RESTORED * settings.feasibility_tolerance < min(accepted[:-1])
     assert state.status == "converged" and state.message == "feasibility restored"
     assert engine.max_violation(state.ev) <= engine.RESTORED * settings.feasibility_tolerance
+
+
+def test_the_penalty_is_steered_up_by_a_step_that_adds_violation_or_keeps_it_inside_the_region():
+    policy = PenaltyPolicy(1.0, 1e6, "absolute")
+    assert policy.steered(1.0, 1.6, None, inside=False)  # the step adds to the linearized violation
+    assert not policy.steered(1.0, 1.4, None, inside=False)
+    assert policy.steered(1.0, 0.6, 0.7, inside=True)  # accepted inside the region, most of it kept
+    assert not policy.steered(1.0, 0.6, 0.3, inside=True)  # the new point removed most of it (the hanging chain)
+    assert not policy.steered(1.0, 0.6, 0.7, inside=False)  # the trust region stopped the step
+    assert not policy.steered(1.0, 0.6, None, inside=True)  # refused

@@ -18,8 +18,8 @@ start point into an :class:`~convexguid.scp.state.IterationState`, and each
 
    trying a :class:`~convexguid.scp.policies.SecondOrderCorrection` when it is poor;
 4. accept or reject, update the radius (:class:`~convexguid.scp.policies.TrustRegionPolicy`);
-5. stop, or raise the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) when the
-   iterates stall with constraints violated.
+5. stop, or raise the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) as soon as a step shows it
+   below the multipliers, or when the iterates stall with constraints violated.
 
 The objective's residuals are linearized (Gauss-Newton); a program may add a convex model of its constraints'
 curvature (``curvature_model``, weighted by the last multipliers: an S :math:`\\ell_1` QP step, Fletcher 1985). A
@@ -92,10 +92,6 @@ the violation's minimum (COPS' hang glider spent 140 phase-1 iterations taking i
 
 PINNED = 0.9
 """A linear subproblem's step of at least this share of the trust radius reached it (see ``IterationState.pinned``)."""
-
-RETAINED = 0.5
-"""The share of the violation by which a step's linearization adds to it, or that an accepted step inside its trust
-region keeps, that raises the penalty weight (``SCPAlgorithm._penalty_too_low``)."""
 
 POLISH_ITERATIONS = 20
 """A feasible stall whose KKT residuals are above tolerance goes on polishing (the curved subproblem of
@@ -339,30 +335,13 @@ class SCPAlgorithm:
 
     def _penalty_too_low(self, state: IterationState, step: float, linearized: float, accepted: bool,
                          ev_new: Evaluation) -> bool:
-        """Whether the subproblem's step shows the weight :math:`\\rho` below the multipliers the constraints need,
-        so that it is raised at once, steering the penalty (Byrd, Nocedal & Waltz, "Steering exact penalty methods
-        for nonlinear programming", Optim. Methods Softw. 23, 2008), instead of waiting for the merit's infeasible
-        stationary point. Two signs, away from feasibility (above :data:`NEARLY_FEASIBLE` tolerances):
-
-        * the step adds to the linearized violation (by more than :data:`RETAINED` of it), which the step 0 would not:
-          the subproblem bought objective with violation at the price :math:`\\rho` (a steering method's first
-          test, against the best linearized violation the region allows, which is never above the current one).
-          On min |z - 3|^2 in the disk |z|^2 <= 2 from a weight of 0.1 (tests/test_scp_engine.py) the iterates no
-          longer stall at that weight's infeasible stationary point first;
-        * an accepted step inside the trust region kept more than :data:`RETAINED` of the violation, both in its
-          linearization and at the new point: the box did not stop it, so only :math:`\\rho` did. Measured on a
-          cart-pole swing-up (minimum energy, 40 intervals): the violation sat at 9.7e-3 through 60 shrinking steps
-          until they counted as a stall; the run then ended five iterations after the weight rose. The new point must
-          keep it too: the hanging chain's first steps keep half their linearized violation yet remove two thirds of
-          the real one, and raising the weight there took the run from 159 iterations to `max_iterations`.
-        """
-        violation = penalty_sum(state.ev)
+        """Whether the step shows the weight below the multipliers (:meth:`PenaltyPolicy.steered
+        <convexguid.scp.policies.PenaltyPolicy.steered>`), away from feasibility (above :data:`NEARLY_FEASIBLE`
+        tolerances) and outside phase 1."""
         if self.phase1 or max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance:
             return False
-        if linearized > (1 + RETAINED) * violation:
-            return True
-        return (accepted and step < PINNED * state.radius and linearized > RETAINED * violation
-                and penalty_sum(ev_new) > RETAINED * violation)
+        return self.penalty.steered(penalty_sum(state.ev), linearized, penalty_sum(ev_new) if accepted else None,
+                                    step < PINNED * state.radius)
 
     def _raise_penalty(self, state: IterationState) -> bool:
         """Raise the penalty weight by its factor (False at its maximum); the merit and the radius follow."""
@@ -398,16 +377,7 @@ class SCPAlgorithm:
 
     def _relax_penalty(self, state: IterationState) -> None:
         """Near a feasible point, let the penalty weight follow the multipliers
-        (:meth:`~convexguid.scp.policies.PenaltyPolicy.relaxed`).
-
-        Any weight above the multipliers keeps the penalty exact; one far beyond them makes the merit function
-        count the linearization error of a step (a violation of order step squared) as the model's main loss,
-        so the ratio test keeps the trust region small and the SCP crawls. Measured on Betts' minimum-time slew
-        (problems/betts_asymmetric_slew.yaml): at the starting weight, 27 times the largest multiplier, the trust
-        radius stayed at 0.03-0.06 for 25 iterations (35 in all); following the multipliers at 3 times the
-        largest, 13 iterations to the same time. A softened row whose violation the subproblem kept has its
-        multiplier at the weight, so a weight that is still needed is never lowered.
-        """
+        (:meth:`~convexguid.scp.policies.PenaltyPolicy.relaxed`, where the measurement is)."""
         if self.phase1 or state.multipliers is None or max_violation(state.ev) > self.settings.second_order_violation:
             return
         target = self.penalty.relaxed(state.penalty, state.multipliers.largest(), self.objective_size)
