@@ -46,6 +46,10 @@ EQUALITY_TOLERANCE = FINAL_TOLERANCE
 """Largest error of a path equality on the dense grid, in its magnitude: an equality cannot be held with a margin,
 so between nodes it drifts as the final state does, and is judged as the final state is."""
 
+NEAR_BREAKING = 0.1
+"""A repair that tightens a constraint tightens it on every interval where the dense check found it broken or
+within this share of the tolerance of breaking (:data:`PATH_TOLERANCE`)."""
+
 MARGIN_FLOOR = 1e-6
 """Smallest tightening a repair adds to the path constraints."""
 
@@ -204,7 +208,7 @@ class DenseChecker:
             if name[0] == "path" and p.constraints[name[1]].equality:
                 broken_equality |= bool(np.any(excess > EQUALITY_TOLERANCE))
                 continue  # an equality cannot be tightened: only a finer grid helps
-            for k in np.unique(interval[excess > PATH_TOLERANCE]):
+            for k in np.unique(interval[excess > NEAR_BREAKING * PATH_TOLERANCE]):
                 worst = float(excess[interval == k].max())
                 margin = grown_margin(worst, attempt, MARGIN_FLOOR)
                 kind, index = name
