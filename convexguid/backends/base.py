@@ -84,8 +84,8 @@ class BackendResult:
     dual_residual: float
     z: np.ndarray | None = None
     exact_objective: bool = False
-    """``objective`` is :meth:`ConicProgram.objective` at ``x`` less the constant, evaluated as that method does
-    (the dense backend's own check of its answer), so a caller need not evaluate it a second time."""
+    """``objective`` is :meth:`ConicProgram.objective` at ``x`` less the constant, to rounding (the dense backend's own
+    check of its answer, with ``P x`` from its dense Hessian), so a caller need not evaluate it a second time."""
 
     @property
     def usable(self) -> bool:

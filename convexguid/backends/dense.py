@@ -279,15 +279,18 @@ class DaqpBackend(Backend):
             return BackendResult("failed", None, float("nan"), 0, time.perf_counter() - start, float("nan"),
                                  float("nan"))
         try:
-            status, x, z, iterations = self._solve(prog)
+            status, x, z, iterations, hessian = self._solve(prog)
         except (ValueError, np.linalg.LinAlgError):  # DAQP refused the data (e.g. not finite)
             self._high = self._lam = None
-            status, x, z, iterations = "failed", None, None, 0
+            status, x, z, iterations, hessian = "failed", None, None, 0, None
         if x is None:
             return BackendResult(status, None, float("nan"), iterations, time.perf_counter() - start,
                                  float("nan"), float("nan"))
-        px = prog.hessian_times(x)
-        objective = float(0.5 * x @ px + prog.q @ x)  # ConicProgram.objective's sum, less the constant
+        # P x from the dense core Hessian (P is zero on the slacks, which check() confirmed): the same product to
+        # rounding, 6 us against the sparse upper triangle's 70 us (P x + P' x - diag(P) x, at N = 32)
+        px = np.zeros(x.size)
+        px[self._layout.core] = hessian @ x[self._layout.core]
+        objective = float(0.5 * x @ px + prog.q @ x)  # ConicProgram.objective's sum (to rounding), less the constant
         s = prog.b - prog.A @ x
         nz = prog.cones.zero
         primal = max(float(np.max(np.abs(s[:nz]), initial=0.0)), float(np.max(-s[nz:], initial=0.0)))
@@ -308,7 +311,9 @@ class DaqpBackend(Backend):
             return "optimal"
         return "optimal_inaccurate" if excess <= INACCURATE_FACTOR * tol else "failed"
 
-    def _solve(self, prog: ConicProgram) -> tuple[str, np.ndarray | None, np.ndarray | None, int]:
+    def _solve(self, prog: ConicProgram) -> tuple[str, np.ndarray | None, np.ndarray | None, int, np.ndarray]:
+        """DAQP's answer in the program's layout: status, ``x``, ``z``, DAQP iterations, and the dense symmetric
+        Hessian of the core variables (``P`` there)."""
         import daqp  # the optional solver package, loaded when this backend runs
 
         lay = self._layout
@@ -320,7 +325,7 @@ class DaqpBackend(Backend):
         H = np.zeros(n_c * n_c)
         H[lay.p_dst_t] = prog.P.data[lay.p_src]
         H[lay.p_dst] = prog.P.data[lay.p_src]
-        H = H.reshape(n_c, n_c)
+        H = hessian = H.reshape(n_c, n_c)
         f = prog.q[lay.core].copy()
         n_eq, n_in = lay.eq_rows.size, lay.ineq_rows.size
         if n_eq:
@@ -374,7 +379,7 @@ class DaqpBackend(Backend):
                     break
             if flag not in (1, 2):
                 self._high = self._lam = None
-                return _DAQP_FAILURE.get(flag, "failed"), None, None, iterations
+                return _DAQP_FAILURE.get(flag, "failed"), None, None, iterations, hessian
             lam = np.asarray(info["lam"], dtype=float)
             g = slope + lam[n_c + pen0:]
             switch = np.where(high, g < lo - tol, g > hi + tol)
@@ -385,7 +390,7 @@ class DaqpBackend(Backend):
             dual_start[n_c + pen0:][switch] = 0.0
         else:
             self._high = self._lam = None
-            return "failed", None, None, iterations
+            return "failed", None, None, iterations, hessian
         self._high, self._lam = high, lam
         # the whole program's primal and dual solution
         x = np.zeros(lay.n)
@@ -409,7 +414,7 @@ class DaqpBackend(Backend):
         z[ab.row] = np.maximum(g_a, 0.0)
         z[ab.mirror_row] = np.maximum(-g_a, 0.0)
         z[ab.bound_row] = (q_pen[hinge.size:] - c_a * np.abs(g_a)) / -data[ab.bound_coef]
-        return "optimal", x, z, iterations
+        return "optimal", x, z, iterations, hessian
 
 
 def _positive_definite(H: np.ndarray) -> bool:
