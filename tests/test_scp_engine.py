@@ -501,11 +501,12 @@ def test_phase_one_stops_at_the_first_point_well_inside_the_feasibility_toleranc
     assert engine.max_violation(state.ev) <= engine.RESTORED * settings.feasibility_tolerance
 
 
-def test_the_penalty_is_steered_up_by_a_step_that_adds_violation_or_keeps_it_inside_the_region():
+def test_the_penalty_is_steered_up_by_a_step_that_adds_violation_or_by_steps_that_keep_it_inside_the_region():
     policy = PenaltyPolicy(1.0, 1e6, "absolute")
-    assert policy.steered(1.0, 1.6, None, inside=False)  # the step adds to the linearized violation
-    assert not policy.steered(1.0, 1.4, None, inside=False)
-    assert policy.steered(1.0, 0.6, 0.7, inside=True)  # accepted inside the region, most of it kept
-    assert not policy.steered(1.0, 0.6, 0.3, inside=True)  # the new point removed most of it (the hanging chain)
-    assert not policy.steered(1.0, 0.6, 0.7, inside=False)  # the trust region stopped the step
-    assert not policy.steered(1.0, 0.6, None, inside=True)  # refused
+    assert policy.steered(1.0, 1.6, None, False, 0) == (True, 0)  # the step adds to the linearized violation
+    assert policy.steered(1.0, 1.4, None, False, 0) == (False, 0)
+    assert policy.steered(1.0, 0.6, 0.7, True, 0) == (False, 1)  # accepted inside the region, most of it kept ...
+    assert policy.steered(1.0, 0.6, 0.7, True, 2) == (True, 3)  # ... by three steps in a row
+    assert policy.steered(1.0, 0.6, 0.3, True, 2) == (False, 0)  # the new point removed most of it (the chain)
+    assert policy.steered(1.0, 0.6, 0.7, False, 2) == (False, 0)  # the trust region stopped the step
+    assert policy.steered(1.0, 0.6, None, True, 2) == (False, 0)  # refused

@@ -20,8 +20,7 @@ with :math:`\\bar H` the scaled Hessian of the Lagrangian (Gauss-Newton part inc
 subproblem's multipliers) made positive semidefinite: first :math:`H + \\gamma A_W^T A_W` over the working set's
 rows :math:`A_W`, which leaves the model unchanged on the directions those constraints leave free and, for
 :math:`\\gamma` large enough, makes the Hessian positive definite wherever the reduced Hessian is (Finsler's lemma;
-Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.3; at a polish :math:`\\gamma` is raised until it
-does, :data:`ESCALATION`), then any eigenvalue still below a small floor
+Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.3), then any eigenvalue still below a small floor
 raised to it (a reduced Hessian that is indefinite: Nocedal & Wright Sec. 3.4). The QP is the condensed one
 (:mod:`convexguid.scp.condensed`, the residuals substituted, a dense Hessian in the step) and goes to the run's own
 dense solver, or to Clarabel (:meth:`CurvedSubproblem.backend_name`). Second-order cones stay in it exact, as in
@@ -78,45 +77,21 @@ CURVED_SIZE = 600
 eigendecomposition and the QP are dense. Measured from a violation of 1e-4: Betts' slew (1311 variables) took
 990 s so, against 5 s with the sparse model (the same plan); larger programs take it only at a feasible stall."""
 
-ESCALATION = 4
-"""Times a polish's :math:`\\gamma` may grow tenfold before the Hessian's leftover negative eigenvalues are clipped
-instead. A reduced Hessian that is positive definite but nearly singular (a discretized singular arc) needs a large
-:math:`\\gamma`: on Aly and Chan's singular problem (50 intervals) its eigenvalues span 2e-9 to 5e-3, and
-:math:`H + \\gamma A_W^T A_W` is indefinite below :math:`10^4` times the polish's first :math:`\\gamma`. Clipped
-there, the reduced Hessian changed by more than its largest entry, and the objective stalled at 7.6e-6 (the optimum
-is 0); kept, it reached 3.0e-7 (still ``unverified``: the near-zero objective leaves the stationarity 0.02
-relative)."""
-
-
-def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION,
-                escalation: int = ESCALATION) -> tuple[np.ndarray, float]:
-    """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows`` with the least :math:`\\gamma`
-    of ``weight`` (in units of the Hessian's largest entry over the rows' median squared norm) times
-    :math:`10^k`, :math:`k \\le` :data:`ESCALATION`, that makes it positive semidefinite (a Cholesky factor of it
-    plus a floor of 1e-10 of the Hessian's largest entry; the floor is kept); failing that, at the first
-    :math:`\\gamma`, its negative eigenvalues raised to zero (the trust region bounds the step where no curvature
-    does). Returns the model and :math:`\\gamma`."""
+def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION) -> tuple[np.ndarray, float]:
+    """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows``, its negative eigenvalues raised to
+    zero (the trust region bounds the step where no curvature does); and :math:`\\gamma`."""
     H = 0.5 * (hessian + hessian.T)
     size = max(float(np.max(np.abs(H), initial=0.0)), 1e-12)
-    gamma, base = 0.0, H
+    gamma = 0.0
     if rows.shape[0]:
         norms = np.linalg.norm(rows, axis=1)
         typical = float(np.median(norms[norms > 0])) if np.any(norms > 0) else 1.0
         gamma = weight * size / typical**2
-        normal = rows.T @ rows
-        base = H + gamma * normal
-        for k in range(escalation + 1):
-            augmented = H + (gamma * 10.0**k) * normal
-            floored = augmented + 1e-10 * size * np.eye(H.shape[0])
-            try:
-                np.linalg.cholesky(floored)
-            except np.linalg.LinAlgError:
-                continue
-            return 0.5 * (floored + floored.T), gamma * 10.0**k
-    values, vectors = np.linalg.eigh(base)
+        H = H + gamma * (rows.T @ rows)
+    values, vectors = np.linalg.eigh(H)
     if values[0] < 0.0:
-        base = (vectors * np.maximum(values, 0.0)) @ vectors.T
-    return 0.5 * (base + base.T), gamma
+        H = (vectors * np.maximum(values, 0.0)) @ vectors.T
+    return 0.5 * (H + H.T), gamma
 
 
 @dataclass(frozen=True)
@@ -183,8 +158,8 @@ class CurvedSubproblem:
                                                                 algo.settings.feasibility_tolerance, state.penalty),
                                   state.multipliers)
         model = algo.second_order.at(state.x, state.raw, state.multipliers, working)
-        weight, escalation = (POLISH_AUGMENTATION, ESCALATION) if state.polish else (AUGMENTATION, 0)
-        return CurvedModel(*convexified(model.hessian, model.rows, weight, escalation), model.rows, working)
+        weight = POLISH_AUGMENTATION if state.polish else AUGMENTATION
+        return CurvedModel(*convexified(model.hessian, model.rows, weight), model.rows, working)
 
     def solve(self, state: IterationState, ev: Evaluation, model: CurvedModel) -> tuple[BackendResult, float]:
         """The backend's answer and the model's merit after its step (as the engine's own subproblem gives them);

@@ -339,16 +339,19 @@ class SCPAlgorithm:
         <convexguid.scp.policies.PenaltyPolicy.steered>`), away from feasibility (above :data:`NEARLY_FEASIBLE`
         tolerances) and outside phase 1."""
         if self.phase1 or max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance:
+            state.kept = 0
             return False
-        return self.penalty.steered(penalty_sum(state.ev), linearized, penalty_sum(ev_new) if accepted else None,
-                                    step < PINNED * state.radius)
+        steer, state.kept = self.penalty.steered(penalty_sum(state.ev), linearized,
+                                                 penalty_sum(ev_new) if accepted else None,
+                                                 step < PINNED * state.radius, state.kept)
+        return steer
 
     def _raise_penalty(self, state: IterationState) -> bool:
         """Raise the penalty weight by its factor (False at its maximum); the merit and the radius follow."""
         rho = self.penalty.escalated(state.penalty, self.objective_size)
         if rho is None:
             return False
-        state.penalty = rho
+        state.penalty, state.kept = rho, 0
         state.merit = self.merit(state.ev, state.x, rho)
         state.radius = self.trust_region.after_penalty_change(state.radius)
         return True

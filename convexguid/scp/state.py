@@ -59,6 +59,8 @@ class IterationState:
     working_set: WorkingSet | None = None
     escapes: int = 0
     polish: int = 0
+    kept: int = 0
+    """Accepted steps in a row inside the trust region that kept the violation (the penalty's steering)."""
     pinned: int = 0
     """Linear subproblems in a row whose step reached the trust region: the model lacks the curvature to stop it."""
     escape_log: list[str] = field(default_factory=list)
