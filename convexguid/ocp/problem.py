@@ -451,18 +451,14 @@ class Problem:
         return start, end, control
 
     def state_scales(self) -> np.ndarray:
-        """Each state's magnitude: its scale, or, when nothing stated gives its size, the change its rate can make
-        over the horizon, :math:`t_f \\max |f_i|` over the straight-line guess (at five instants) with each control
-        at its guess and across its range in turn (nine values between finite bounds), when that is above 1. The
-        trust region is a box in scaled variables, so a state of unknown size scaled by 1 could move by about 1 per
-        iteration whatever its range (measured on COPS particle steering: a position that ends near 12 held every
-        step to 0.03-0.5, 100 iterations without convergence). Bounds and boundary values give the size unless
-        they are all below :data:`NEGLIGIBLE` times that change: Dymos' single stage to orbit starts its vertical
-        speed at 1e-6 m/s to keep the drag's direction defined, and it reaches hundreds of m/s (scaled by 1e-6, the
-        first defects were 1e7 and the first convex subproblem failed). The estimate is crude (at the
-        straight-line guess, every control extreme), so it does not override values of a sensible size: raised to
-        it, Betts' shuttle took 491 iterations against 169. The defects and the final-state check are measured in
-        the same magnitude."""
+        """Each state's magnitude: its scale, or, when nothing stated gives its size (or the stated values are all
+        below :data:`NEGLIGIBLE` of it), the change its rate can make over the horizon, :math:`t_f \\max |f_i|` over
+        the straight-line guess (at five instants) with each control at its guess and across its range in turn (nine
+        values between finite bounds), when that is above 1. The trust region is a box in scaled variables: COPS'
+        particle steering, a position near 12 scaled by 1, held every step to 0.03-0.5 (100 iterations, no
+        convergence); Dymos' single stage to orbit, a vertical speed started at 1e-6 m/s and scaled so, had defects of
+        1e7 and every subproblem failed. The estimate is crude, so values of a sensible size are kept (raised to it,
+        Betts' shuttle took 491 iterations, not 169). The defects and the final-state check use the same magnitude."""
         scales = np.array([v.scale for v in self.states])
         unknown = [i for i, v in enumerate(self.states) if v.scale_from != "stated"]
         if not unknown:
