@@ -92,7 +92,7 @@ def test_the_sparse_bounded_least_squares_agrees_with_bvls():
     lower = np.where(np.arange(25) < 15, 0.0, -np.inf)  # signed multipliers first, free ones after
     exact = lsq_linear(matrix.toarray(), target, bounds=(lower, np.full(25, np.inf)), method="bvls").x
     assert np.any(exact[:15] == 0.0) and np.any(exact[:15] > 0.0)  # some bounds active, some not
-    sparse = _sparse_bounded_least_squares(matrix, target, lower).x
+    sparse = _sparse_bounded_least_squares(matrix, target, lower)
     np.testing.assert_allclose(sparse, exact, atol=1e-7)
 
 

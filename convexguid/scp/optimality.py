@@ -11,7 +11,6 @@ following; a stationary point with one is a saddle, left along that direction (:
 from __future__ import annotations
 
 from dataclasses import replace
-from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -160,24 +159,24 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(size, -np.inf),
                             np.zeros(cone_rows.shape[0])])
     target = -objective_gradient(raw, algo.weights, algo.cost) * algo.scale
-    bounds = (lower, np.full(lower.size, np.inf))
     if (rows.shape[0] + cone_rows.shape[0]) * rows.shape[1] <= DENSE_LEAST_SQUARES:
         matrix = (np.vstack([rows, cone_rows.toarray()]) * algo.scale).T
-        fit = lsq_linear(matrix, target, bounds=bounds, method="bvls")
+        y = lsq_linear(matrix, target, bounds=(lower, np.full(lower.size, np.inf)), method="bvls").x
     else:
         matrix = sp.vstack([sp.csr_matrix(rows), cone_rows]).multiply(algo.scale[None, :]).T
-        fit = _sparse_bounded_least_squares(sp.csc_matrix(matrix), target, lower)
-        if fit is None:
+        y = _sparse_bounded_least_squares(sp.csc_matrix(matrix), target, lower)
+        if y is None:
             return None
     shape = Multipliers(np.zeros(size), np.zeros(values.size), np.zeros(out.size), np.zeros(free), np.zeros(gap.size))
-    estimate = working.multipliers(fit.x[: rows.shape[0]], shape)
-    return replace(estimate, cone=cone_duals @ fit.x[rows.shape[0]:]) if raw.cones else estimate
+    estimate = working.multipliers(y[: rows.shape[0]], shape)
+    return replace(estimate, cone=cone_duals @ y[rows.shape[0]:]) if raw.cones else estimate
 
 
-def _sparse_bounded_least_squares(matrix: sp.csc_matrix, target: np.ndarray, lower: np.ndarray):
+def _sparse_bounded_least_squares(matrix: sp.csc_matrix, target: np.ndarray,
+                                  lower: np.ndarray) -> np.ndarray | None:
     """:math:`\\min_y \\tfrac12 \\|M y - t\\|^2` with :math:`y_i \\ge` ``lower`` where that is finite (0 or
-    :math:`-\\infty`), as the sparse QP in :math:`(y, r)` with :math:`r = M y - t` (Clarabel); an object with the
-    solution as ``x``, or None when Clarabel does not solve it."""
+    :math:`-\\infty`), as the sparse QP in :math:`(y, r)` with :math:`r = M y - t` (Clarabel): its :math:`y`, or
+    None when Clarabel does not solve it."""
     m, n = matrix.shape
     signed = np.flatnonzero(np.isfinite(lower))
     P = sp.block_diag([sp.csc_matrix((n, n)), sp.identity(m, format="csc")], format="csc")
@@ -186,7 +185,7 @@ def _sparse_bounded_least_squares(matrix: sp.csc_matrix, target: np.ndarray, low
     program = ConicProgram(sp.triu(P, format="csc"), np.zeros(n + m), A, np.concatenate([target, -lower[signed]]),
                            Cones(zero=m, nonneg=signed.size))
     result = make_backend("clarabel", program, tolerance=1e-10).solve()
-    return None if result.x is None else SimpleNamespace(x=result.x[:n])
+    return None if result.x is None else result.x[:n]
 
 
 def _cone_rows(raw, n: int) -> tuple[sp.csr_matrix, np.ndarray]:
