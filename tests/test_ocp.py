@@ -394,8 +394,8 @@ def test_a_statement_of_the_same_graph_reuses_its_derivatives_and_another_does_n
             example.G = original
 
     first, again, other = brachistochrone(9.81), brachistochrone(9.81), brachistochrone(9.80)
-    assert first._defects is again._defects and first._hessian[0] is again._hessian[0]
-    assert other._defects is not first._defects and other._hessian[0] is not first._hessian[0]
+    assert first._defects is again._defects and first._hessian is again._hessian
+    assert other._defects is not first._defects and other._hessian is not first._hessian
     z = first.initial_guess()
     assert np.array_equal(np.asarray(first._defects(z)[0]), np.asarray(again._defects(z)[0]))
     assert not np.allclose(np.asarray(first._defects(z)[0]), np.asarray(other._defects(z)[0]))

@@ -4,12 +4,15 @@ and the first guess the engine starts from."""
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
 from convexguid.ocp import Problem
 from convexguid.ocp.curvature import ElementCurvature
+from convexguid.ocp.element_hessian import ElementHessian
+from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.solve import transcribe
 from convexguid.scp.lagrangian import CurvatureWeights
 
@@ -55,14 +58,40 @@ def test_convex_constraints_give_the_exact_lagrangian_hessian():
 def test_each_element_keeps_its_net_positive_curvature():
     """Three elements of one row each: a bilinear term (eigenvalues +1, -1) adds nothing, a convex one is kept
     whole, a mixed one (3 and -1) keeps its positive part at its net share (3 - 1) / 3."""
-    rows, cols = np.array([0, 1, 2, 3, 4, 5]), np.array([1, 0, 2, 3, 4, 5])
-    coefficients = np.array([1.0, 1.0, 2.0, 1.0, 3.0, -1.0])
-    contributions = sp.csr_matrix((np.ones(6), (np.arange(6), [0, 0, 1, 1, 2, 2])), shape=(6, 3))
-    elements = ElementCurvature(lambda z, w: coefficients * w[[0, 0, 1, 1, 2, 2]], rows, cols, contributions,
-                                np.arange(3))
+    z = ca.SX.sym("z", 6)
+    rows = ca.vertcat(z[0] * z[1], z[2] ** 2 + 0.5 * z[3] ** 2, 1.5 * z[4] ** 2 - 0.5 * z[5] ** 2)
+    elements = ElementCurvature(ElementHessian(z, rows, np.arange(3)))
     model = _matrix(elements, elements.values(np.zeros(6), np.ones(3)), 6)
     assert np.allclose(model, np.diag([0.0, 0.0, 2.0, 1.0, 2.0, 0.0]), atol=1e-14)
     assert np.allclose(_matrix(elements, elements.values(np.zeros(6), [1.0, -1.0, 0.0]), 6), 0.0, atol=1e-14)
+
+
+@pytest.mark.parametrize("grid", [None, [0.0, 0.1, 0.3, 0.35, 0.6, 0.8, 1.0]])
+def test_the_hessian_by_element_classes_is_casadis_hessian_of_the_whole_lagrangian(grid):
+    """Built class by class in each interval's own variables (convexguid.ocp.element_hessian), the Lagrangian's
+    Hessian is CasADi's of the whole program, with time in the dynamics, a free final time and, on an uneven grid,
+    intervals that are each their own class."""
+    p = Problem("driven")
+    x = p.state("x", initial=0.0, final=1.0)
+    v = p.state("v", initial=0.0, final=0.0)
+    u = p.control("u", bounds=(-3.0, 3.0))
+    p.dynamics({x: v * ca.cos(0.3 * p.time) + x * v, v: u - 0.1 * v**2 * ca.sin(p.time)})
+    p.path_constraint("disc", x**2 + v**2 * u - 4.0)
+    p.final_time(bounds=(0.5, 5.0), guess=2.0)
+    p.minimize_time()
+    p.transcription(6)
+    program = transcribe(p) if grid is None else HermiteSimpsonProgram(p, grid=grid)
+    rng = np.random.default_rng(5)
+    z, weights = program.initial_guess() + rng.normal(0, 0.2, program.num_variables), _weights(program, rng)
+    symbols, equalities, path, epigraph = program._symbols
+    multipliers = [ca.SX.sym("w", e.shape[0]) for e in (equalities, path, epigraph)]
+    whole = ca.Function("whole", [symbols, *multipliers], [ca.hessian(sum(
+        (ca.dot(w, e) for w, e in zip(multipliers, (equalities, path, epigraph), strict=True) if e.shape[0]), ca.SX(0)),
+        symbols)[0]])
+    expected = np.asarray(ca.densify(whole(z, weights.equality, weights.inequality[: path.shape[0]],
+                                           weights.inequality[path.shape[0]: path.shape[0] + epigraph.shape[0]])))
+    assert len(program._hessian.classes) > (5 if grid else 1)
+    assert np.allclose(program.lagrangian_hessian(z, weights).toarray(), expected, rtol=1e-12, atol=1e-12)
 
 
 def test_bilinear_dynamics_give_a_convex_model():

@@ -24,7 +24,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.ocp.check import FINAL_TOLERANCE, DenseChecker
-from convexguid.ocp.curvature import ElementCurvature, lagrangian_hessian
+from convexguid.ocp.curvature import ElementCurvature
+from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.parts import SparsityPattern, SymbolicNLP
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair
@@ -216,9 +217,10 @@ class PhasedProgram:
         return counts
 
     @cached_property
-    def _link_hessian(self) -> tuple[ca.Function, SparsityPattern]:
-        """The nonlinear links' curvature, weighted by their equality and inequality multipliers."""
-        return lagrangian_hessian(self._symbols, [self._blocks[True][0], self._blocks[False][0]])
+    def _link_hessian(self) -> ElementHessian:
+        """The nonlinear links' curvature (equalities, then inequalities), each link its own element."""
+        links = ca.vertcat(self._blocks[True][0], self._blocks[False][0])
+        return element_hessian(self._symbols, links, np.arange(links.shape[0]))
 
     def _shares(self, weights) -> tuple[list[Weights], Weights]:
         """Each phase's share of the engine's multipliers, and the links' (after every phase's)."""
@@ -237,8 +239,7 @@ class PhasedProgram:
         hessian = sp.block_diag([t.lagrangian_hessian(piece, share) for t, piece, share
                                  in zip(self.phases, self.pieces(z), shares, strict=True)]).tocsr()
         if self.nonlinear:
-            function, pattern = self._link_hessian
-            hessian = hessian + pattern.coo(function(z, links.equality, links.inequality)).tocsr()
+            hessian = hessian + self._link_hessian.matrix(z, np.concatenate([links.equality, links.inequality]))
         return hessian
 
     def curvature_model(self) -> CurvatureModel | None:
@@ -264,8 +265,7 @@ class PhasedProgram:
     @cached_property
     def _link_curvature(self) -> ElementCurvature:
         """Each nonlinear link its own element."""
-        rows = sum(self._blocks[equality][0].shape[0] for equality in (True, False))
-        return ElementCurvature.of(self._link_hessian, np.arange(rows))
+        return ElementCurvature(self._link_hessian)
 
     def symbolic_nlp(self) -> SymbolicNLP:
         """Every phase's NLP on its part of one decision vector, and the links (the IPOPT reference reads it)."""

@@ -35,7 +35,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
-from convexguid.ocp.curvature import ElementCurvature, interval_of_rows, lagrangian_hessian
+from convexguid.ocp.curvature import ElementCurvature, interval_of_rows
+from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.guess import flown_free_states
 from convexguid.ocp.parts import DERIVATIVES, AffineCones, Margins, SparsityPattern, SymbolicNLP
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
@@ -304,10 +305,11 @@ class Transcription:
         return np.repeat(self.per_step_weights(), self.slacks_per_value)
 
     @cached_property
-    def _hessian(self) -> tuple[ca.Function, SparsityPattern]:
-        """The exact Lagrangian Hessian and its pattern: a function of ``z`` and the equalities', path rows' and
-        epigraph row's multipliers."""
-        return lagrangian_hessian(self._symbols[0], list(self._symbols[1:]))
+    def _hessian(self) -> ElementHessian:
+        """The exact Lagrangian Hessian of the equalities, path rows and epigraph row, interval by interval."""
+        z, equalities, path, epigraph = self._symbols
+        return element_hessian(z, ca.vertcat(equalities, path, epigraph),
+                               interval_of_rows(self, equalities.shape[0], epigraph.shape[0]))
 
     @cached_property
     def _weights_per_step(self) -> np.ndarray:
@@ -514,21 +516,20 @@ class Transcription:
 
     @cached_property
     def _element_curvature(self) -> ElementCurvature:
-        _, equalities, _, epigraph = self._symbols
-        return ElementCurvature.of(self._hessian, interval_of_rows(self, equalities.shape[0], epigraph.shape[0]))
+        return ElementCurvature(self._hessian)
 
     def curvature_model(self) -> CurvatureModel | None:
         """The constraints' exact curvature made convex interval by interval (:mod:`convexguid.ocp.curvature`),
         weighted by the multipliers of the equalities, the path rows and the epigraph row; None when affine."""
         if self.affine:  # no curvature to model: the Hessian is not even built
             return None
-        inequalities = self.num_path + self._symbols[3].shape[0]
-        return self._element_curvature.model(lambda w: np.concatenate([w.equality, w.inequality[:inequalities]]))
+        return self._element_curvature.model(self._row_weights)
+
+    def _row_weights(self, weights) -> np.ndarray:
+        """One multiplier per row of :attr:`_hessian`: the equalities', the path rows' and the epigraph row's."""
+        return np.concatenate([weights.equality, weights.inequality[: self.num_path + self._symbols[3].shape[0]]])
 
     def lagrangian_hessian(self, z: np.ndarray, weights) -> sp.csr_matrix:
         """CasADi's exact :math:`\\sum \\lambda_k \\nabla^2 e_k + \\sum \\mu_j \\nabla^2 g_j` (the energy residuals are
         linear in ``z``: no curvature of their own)."""
-        function, pattern = self._hessian
-        mu = weights.inequality[: self.num_path]
-        nu = weights.inequality[self.num_path:]
-        return pattern.coo(function(z, weights.equality, mu, nu)).tocsr()
+        return self._hessian.matrix(z, self._row_weights(weights))
