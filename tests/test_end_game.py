@@ -21,6 +21,7 @@ from test_scp_engine import HS071_X, HS071Epigraph, _SmallProgram
 from convexguid.api import solve
 from convexguid.families import get_family
 from convexguid.problem_files import load_problem
+from convexguid.scp.endgame import newton_step
 from convexguid.scp.engine import solve_scp
 from convexguid.scp.lagrangian import CurvatureWeights
 from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, SCPSettings
@@ -105,6 +106,18 @@ class SymmetricSaddle(_SmallProgram):
         return np.diag([-2.0 * weights.inequality[0], 0.0])
 
 
+def test_the_newton_step_is_regularized_where_the_reduced_hessian_is_indefinite():
+    """One equality x + y = 0: along its null space (1, -1)/sqrt(2) the Hessian diag(1, -3) curves by -1. The step
+    shifts that by 1.1 (the most negative eigenvalue and a tenth more), so it moves ten times the gradient's share
+    downhill; a positive definite reduced Hessian gives Newton's own step, unshifted."""
+    rows, values, gradient = np.array([[1.0, 1.0]]), np.zeros(1), np.array([1.0, 0.0])
+    indefinite = newton_step(gradient, np.diag([1.0, -3.0]), rows, values)
+    assert indefinite.smallest_eigenvalue == pytest.approx(-1.0) and indefinite.shift == pytest.approx(1.1)
+    assert np.allclose(indefinite.step, [-5.0, 5.0]) and abs(rows @ indefinite.step) < 1e-14
+    newton = newton_step(gradient, np.diag([3.0, 1.0]), rows, values)
+    assert newton.shift == 0.0 and newton.negative_direction is None and np.allclose(newton.step, [-0.25, 0.25])
+
+
 def test_a_saddle_is_left_along_its_negative_curvature():
     stuck = solve_scp(SymmetricSaddle(), SCPSettings(backend="clarabel", second_order=False))
     assert stuck.x[0] == pytest.approx(0.0, abs=1e-9)  # the first-order loop cannot leave the symmetric point
@@ -159,3 +172,24 @@ def test_betts_asymmetric_slew_reaches_the_published_minimum_time():
     assert sol.figures.maneuver_time_s == pytest.approx(28.6304, rel=5e-4)
     assert sol.summary()["kkt"]["met"]
     assert sol.iterations <= 30
+
+
+class NarrowSaddle(SymmetricSaddle):
+    """:class:`SymmetricSaddle` with x also held within 1e-3 of 0 by two nonlinear rows.
+
+    (0, 1) is still a saddle, but every step off it longer than 1e-3 breaks a row and costs the merit more than
+    the bowl gives back: only a short one finds the minima, x = +-1e-3, t = 1 - 1e-6.
+    """
+
+    def evaluate(self, z: np.ndarray, jacobians: bool = True) -> Evaluation:
+        ev = super().evaluate(z, jacobians)
+        rows = ConstraintBlock("narrow", np.array([z[0] - 1e-3, -z[0] - 1e-3]),
+                               np.array([[1.0, 0.0], [-1.0, 0.0]]) if jacobians else None)
+        return Evaluation(ev.residuals, ev.residual_jacobian, inequalities=(*ev.inequalities, rows))
+
+
+def test_a_saddle_left_only_by_a_short_step_is_left():
+    result = solve_scp(NarrowSaddle(), SCPSettings(backend="clarabel", kkt_tolerance=1e-9))
+    assert result.status == "converged", result.message
+    assert abs(result.x[0]) == pytest.approx(1e-3, abs=1e-8) and result.objective == pytest.approx(1 - 1e-6, abs=1e-8)
+    assert "stepped off a saddle" in result.message

@@ -21,7 +21,11 @@ equality-constrained quadratic step on that subproblem's working set:
   every multiplier is inactive: they then say nothing of the weight needed, and a weight brought down to its
   floor that way left a test program crawling along a cone it broke by 0.68 for 100 iterations
   (tests/test_ocp_cones.py, its multiplier then equal to the weight, so the penalty was not exact);
-* with a least-norm second-order correction when its ratio is poor (the Maratos effect).
+* with a least-norm second-order correction when its ratio is poor (the Maratos effect);
+* a regularized step (the reduced Hessian indefinite, :func:`~convexguid.scp.endgame.newton_step`) by the merit
+  alone, with the iterate's own weight, and not at all when it breaks a hard bound: its multipliers measure
+  nothing, and a funnel that let it through (Betts' three-phase Goddard rocket, whose singular arc makes the
+  reduced Hessian indefinite) alternated it with first-order steps back to feasibility for 300 iterations.
 
 The engine takes it only if it is accepted and it does at least as well as the first-order step
 on the same merit: the end game can make an iteration better, never worse.
@@ -86,15 +90,17 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     model = models.at(state.x, state.raw, state.multipliers, working)
     model, newton = _within_bounds(algo, state, model)
     if newton.step is None:
-        # no step: the reduced Hessian is not positive definite, or the working set is not settled (a bound
-        # outside it stops the step)
+        # no step: the working set is not settled (a bound outside it stops the step)
         return None
     length = float(np.max(np.abs(newton.step), initial=0.0))
     radius = min(state.radius, state.newton_radius)
-    whole = length <= radius
+    whole = length <= radius and not newton.shift
     if length > radius:
         newton = replace(newton, step=newton.step * (radius / length))
-    rho = algo.penalty.judging(state.penalty, state.multipliers.largest(), algo.objective_size)
+    # a regularized step is judged with the iterate's own weight: the multipliers of a working set whose reduced
+    # Hessian is indefinite are no measure of the weight it needs
+    rho = (state.penalty if newton.shift else
+           algo.penalty.judging(state.penalty, state.multipliers.largest(), algo.objective_size))
     merit = algo.merit(state.ev, state.x, rho)
     linearized = linearized_violation(state.raw, algo.outputs, newton.step * algo.scale)
     predicted = merit - (state.objective + model.quadratic(newton.step) + rho * linearized)
@@ -112,7 +118,10 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
             if ratio_soc > ratio:
                 x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
     step = float(np.max(np.abs(x_new - state.x) / algo.scale, initial=0.0))
-    accepted, ratio, funnel = algo.judged(state, ratio, x_new, ev_new, -model.quadratic(newton.step), linearized)
+    if newton.shift:  # the merit alone judges a regularized step
+        accepted, funnel = ratio >= algo.settings.accept_ratio, state.funnel
+    else:
+        accepted, ratio, funnel = algo.judged(state, ratio, x_new, ev_new, -model.quadratic(newton.step), linearized)
     return Candidate(x_new, ev_new, merit_new, rho, ratio, step, predicted, whole, accepted, funnel, model, newton)
 
 
@@ -130,6 +139,8 @@ def _within_bounds(algo: SCPAlgorithm, state: IterationState, model: LocalModel)
         broken = models.broken_bounds(state.x, newton.step)
         if not np.any(broken):
             return model, newton
+        if newton.shift:  # a regularized step says nothing of which bounds belong in the working set
+            return model, replace(newton, step=None)
         model = models.with_bounds(model, state.raw, state.x, broken)
         newton = on_equalities(model.newton())
     if newton.step is not None and np.any(models.broken_bounds(state.x, newton.step)):
