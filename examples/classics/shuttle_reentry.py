@@ -22,7 +22,8 @@ a_1 = 0.029244, b_0 = 0.07854, b_1 = -0.61592e-2, b_2 = 0.621408e-3. Published: 
 (tf = 2008.59 s).
 
 Stated in scaled units so the numbers stay near 1: altitude in 1e5 ft, speed in 1e4 ft/s, angles in radians,
-time in seconds.
+time in seconds. ``build(heating_limit=70)`` adds the example's heating constraint on the wing's leading edge
+(shuttle_reentry_heating.py).
 Run: python examples/classics/shuttle_reentry.py
 """
 
@@ -49,7 +50,15 @@ def figure(final_state: dict[str, float], final_time: float) -> float:
     return math.degrees(final_state["theta"])
 
 
-def build(intervals: int = 50, control: str = "quadratic") -> Problem:
+def heating_rate(altitude, speed, alpha_deg):
+    """Betts' heating rate on the wing's leading edge, BTU/ft^2/s: q = q_a q_r, q_r = 17700 sqrt(rho) (1e-4 v)^3.07
+    and q_a a cubic in the angle of attack in degrees (altitude in ft, speed in ft/s)."""
+    q_r = 17700.0 * ca.sqrt(RHO_0 * ca.exp(-altitude / H_R)) * (1e-4 * speed) ** 3.07
+    q_a = 1.0672181 - 0.19213774e-1 * alpha_deg + 0.21286289e-3 * alpha_deg**2 - 0.10117249e-5 * alpha_deg**3
+    return q_a * q_r
+
+
+def build(intervals: int = 50, control: str = "quadratic", heating_limit: float | None = None) -> Problem:
     p = Problem("betts-shuttle-reentry")
     h = p.state("h", bounds=(0.0, None), initial=260000 / FT, final=80000 / FT, unit="1e5 ft")
     phi = p.state("phi", initial=0.0, scale=1.0, unit="rad")
@@ -75,6 +84,8 @@ def build(intervals: int = 50, control: str = "quadratic") -> Problem:
         psi: (lift * ca.sin(beta) / (MASS * speed * ca.cos(gamma))
               + speed * ca.cos(gamma) * ca.sin(psi) * ca.sin(theta) / (r * ca.cos(theta))),
     })
+    if heating_limit is not None:  # BTU/ft^2/s, held in its own unit
+        p.path_constraint("heating", heating_rate(altitude, speed, alpha_deg) / heating_limit - 1.0)
     p.final_time(bounds=(100.0, 4000.0), guess=1000.0)
     p.minimize_terminal(-theta)
     p.transcription(intervals, control=control)  # Hermite-Simpson
