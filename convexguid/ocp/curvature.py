@@ -32,7 +32,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from convexguid.ocp.element_hessian import ElementClass, ElementHessian
+from convexguid.ocp.element_hessian import ElementClass, ElementHessian, summed_pattern
 from convexguid.scp.problem import CurvatureModel
 
 MAX_ELEMENT = 400
@@ -45,7 +45,6 @@ class ElementCurvature:
     model's pattern (upper triangle)."""
 
     def __init__(self, hessian: ElementHessian) -> None:
-        self.hessian = hessian
         n = hessian.size
         touching = np.zeros(n, dtype=int)  # how many elements' Hessians touch each variable
         for c in hessian.classes:
@@ -57,9 +56,7 @@ class ElementCurvature:
         self.rows = self.cols = np.zeros(0, dtype=int)
         if self.empty:
             return
-        keys = np.concatenate([b.keys(n) for b in self._blocks])
-        unique, self._slot = np.unique(keys, return_inverse=True)
-        self.rows, self.cols = unique // n, unique % n
+        self.rows, self.cols, self._slot = summed_pattern([b.keys(n) for b in self._blocks], n)
 
     def model(self, row_weights: Callable[[object], np.ndarray]) -> CurvatureModel | None:
         """The engine's :class:`~convexguid.scp.problem.CurvatureModel` (None when there is no curvature to model);

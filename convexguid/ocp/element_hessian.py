@@ -66,10 +66,9 @@ class ElementHessian:
             key = hashlib.sha256(ca.Function("element", [local, weights], [lagrangian]).serialize().encode())
             found.setdefault(key.hexdigest(), (local, weights, lagrangian, []))[3].append((variables, rows))
         self.classes = [_element_class(*entry) for entry in found.values()]
-        keys = np.concatenate([(c.variables[:, c.local_rows] * self.size + c.variables[:, c.local_cols]).ravel()
-                               for c in self.classes] + [np.zeros(0, dtype=np.int64)])
-        unique, self._slot = np.unique(keys, return_inverse=True)
-        self.rows, self.cols = unique // self.size, unique % self.size
+        keys = [(c.variables[:, c.local_rows] * self.size + c.variables[:, c.local_cols]).ravel()
+                for c in self.classes]
+        self.rows, self.cols, self._slot = summed_pattern(keys, self.size)
 
     def values(self, z: np.ndarray, weights: np.ndarray) -> np.ndarray:
         """The Hessian's entries on :attr:`rows`, :attr:`cols` at ``z``, rows weighted by ``weights``."""
@@ -90,6 +89,12 @@ def _element_class(local: ca.SX, weights: ca.SX, lagrangian: ca.SX,
     return ElementClass(function, np.array([v for v, _ in members]), np.array([r for _, r in members]),
                         local_rows, local_cols)
 
+
+def summed_pattern(keys: list[np.ndarray], n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(rows, cols, slot)`` of the entries ``row * n + col`` in ``keys``: the distinct positions, and where each
+    entry adds (``np.bincount(slot, values)`` sums them onto the pattern)."""
+    unique, slot = np.unique(np.concatenate([*keys, np.zeros(0, dtype=np.int64)]), return_inverse=True)
+    return unique // n, unique % n, slot
 
 
 def element_hessian(z: ca.SX, constraints: ca.SX, elements: np.ndarray) -> ElementHessian:

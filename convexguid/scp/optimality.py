@@ -98,7 +98,6 @@ def finish_optimal(algo: SCPAlgorithm, state: IterationState) -> None:
                 state.escape_log.append(f"stepped off a saddle (reduced-Hessian eigenvalue "
                                         f"{newton.smallest_eigenvalue:.3g}) at iteration {state.iteration}")
                 return
-            state.escapes = MAX_ESCAPES
             state.escape_log.append(f"negative curvature (reduced-Hessian eigenvalue {newton.smallest_eigenvalue:.3g}) "
                                     f"at iteration {state.iteration} along which the merit rises both ways")
     state.finish("converged", "; ".join(["KKT conditions met", *state.escape_log]))
