@@ -28,7 +28,7 @@ def _module(name: str):
 
 @pytest.mark.parametrize("name", ["particle_steering", "bryson_denham", "orbit_raising", "robot_arm", "goddard_rocket",
                                   "catalyst_mixing", "moon_landing", "time_optimal_slew", "free_flying_robot",
-                                  "rayleigh_mixed"])
+                                  "rayleigh_mixed", "minimum_time_double_integrator"])
 def test_a_classic_reaches_its_published_figure_in_at_most_twice_ipopts_iterations(name):
     module = _module(name)
     solution = module.build().solve()
