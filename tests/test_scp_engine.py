@@ -24,6 +24,7 @@ from scipy.optimize import minimize
 import convexguid.scp.engine as engine
 from convexguid.backends import BackendResult, available_backends
 from convexguid.scp.engine import solve_scp
+from convexguid.scp.lagrangian import Multipliers
 from convexguid.scp.policies import PenaltyPolicy
 from convexguid.scp.problem import (
     ConstraintBlock,
@@ -301,6 +302,23 @@ def test_penalty_below_the_multiplier_is_raised_until_exact(backend, monkeypatch
     assert sorted(set(penalties)) == pytest.approx([0.1, 1.0, 10.0])
     assert penalties == sorted(penalties)
 
+
+
+def test_the_curved_subproblems_multipliers_do_not_lower_the_penalty():
+    """The curved subproblem holds its working rows partly by its augmentation, so its own multipliers understate
+    what the rows need: the weight follows only the other subproblems' multipliers (measured on a minimum-fuel
+    rendezvous with a smoothed thrust norm: a curved step's largest multiplier, 0.012, took the weight from 440 to
+    its floor of 3, and the next steps bought fuel with the defects of the fuel integral itself, down to -3181)."""
+    algo = engine.SCPAlgorithm(ShiftedDisk(), SCPSettings())
+    state = algo.initialize(np.array([1.0, 1.0]))  # on the disk's boundary: feasible
+    state.multipliers = Multipliers(np.zeros(0), np.array([1e-2]), np.zeros(0), np.zeros(0), np.zeros(0))
+    start = state.penalty
+    state.augmented = True
+    algo._relax_penalty(state)
+    assert state.penalty == start
+    state.augmented = False  # the same multipliers from a linear subproblem or Newton's step
+    algo._relax_penalty(state)
+    assert state.penalty == pytest.approx(PenaltyPolicy.from_settings(SCPSettings()).floor * start)
 
 # --- 4. backend failures ------------------------------------------------------------------------
 

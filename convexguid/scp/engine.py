@@ -278,7 +278,7 @@ class SCPAlgorithm:
         d = assembler.step(result.x)
         newton = None
         if result.z is not None:
-            state.multipliers = assembler.multipliers(result.z)
+            state.multipliers, state.augmented = assembler.multipliers(result.z), curved is not None
             if certified_here(self, state, result, state.merit - model):
                 return self._check_limit(state)
             t = time.perf_counter()
@@ -384,8 +384,12 @@ class SCPAlgorithm:
 
     def _relax_penalty(self, state: IterationState) -> None:
         """Near a feasible point, let the penalty weight follow the multipliers
-        (:meth:`~convexguid.scp.policies.PenaltyPolicy.relaxed`, where the measurement is)."""
-        if self.phase1 or state.multipliers is None or max_violation(state.ev) > self.settings.second_order_violation:
+        (:meth:`~convexguid.scp.policies.PenaltyPolicy.relaxed`, where the measurement is); not on the curved
+        subproblem's multipliers, which understate it (measured on a minimum-fuel rendezvous whose fuel rate is
+        :math:`\\sqrt{|u|^2 + \\epsilon}`: a curved step's largest multiplier, 0.012, took the weight from 440 to its
+        floor of 3, and the next eight steps bought fuel with the fuel integral's own defects, to -3181)."""
+        if (self.phase1 or state.multipliers is None or state.augmented
+                or max_violation(state.ev) > self.settings.second_order_violation):
             return
         target = self.penalty.relaxed(state.penalty, state.multipliers.largest(), self.objective_size)
         if target is not None:
@@ -422,6 +426,7 @@ class SCPAlgorithm:
         self.move_to(state, newton.x, newton.penalty)
         state.funnel = newton.funnel
         state.multipliers = newton.model.working.multipliers(newton.newton.multipliers, state.multipliers)
+        state.augmented = False
         measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
         self.record(state, newton.step, newton.ratio, True, replace(result, status="newton"))

@@ -99,7 +99,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
         newton = replace(newton, step=newton.step * (radius / length))
     # a regularized step is judged with the iterate's own weight: the multipliers of a working set whose reduced
     # Hessian is indefinite are no measure of the weight it needs
-    rho = (state.penalty if newton.shift else
+    rho = (state.penalty if newton.shift or state.augmented else
            algo.penalty.judging(state.penalty, state.multipliers.largest(), algo.objective_size))
     merit = algo.merit(state.ev, state.x, rho)
     linearized = linearized_violation(state.raw, algo.outputs, newton.step * algo.scale)

@@ -52,6 +52,9 @@ class IterationState:
     penalty: float
     started: float
     multipliers: Multipliers | None = None
+    augmented: bool = False
+    """The multipliers are the curved subproblem's, which leaves part of each working row's to its augmentation
+    (:mod:`convexguid.scp.curved`): they understate the weight the penalty needs."""
     kkt: KKTResiduals | None = None
     funnel: Funnel | None = None
     """The funnel on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`), None without one."""
