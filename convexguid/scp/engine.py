@@ -101,7 +101,8 @@ benchmark, slew #4): 14 more iterations to the KKT tolerance, 5e-6 below where t
 random rendezvous #75 lies in a long flat valley: Newton's steps take its fuel down by about 1e-8 of it each, and
 every curved step between them is a stall. At 20 it ended ``unverified`` (stationarity 4e-6) after 128 iterations,
 or converged after 87 (7.6e-7) where the last bits of its Hessian differed; at 40 it converges after 174, 3e-7
-lower."""
+lower (measured before the penalty stopped following the curved step's multipliers; the family's largest count is
+108 since)."""
 
 
 class SCPAlgorithm:
