@@ -98,7 +98,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     if length > radius:
         newton = replace(newton, step=newton.step * (radius / length))
     # a regularized step is judged with the iterate's own weight: the multipliers of a working set whose reduced
-    # Hessian is indefinite are no measure of the weight it needs
+    # Hessian is indefinite are no measure of the weight it needs, nor are a curved subproblem's (they understate it)
     rho = (state.penalty if newton.shift or state.augmented else
            algo.penalty.judging(state.penalty, state.multipliers.largest(), algo.objective_size))
     merit = algo.merit(state.ev, state.x, rho)
