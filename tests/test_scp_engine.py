@@ -303,7 +303,6 @@ def test_penalty_below_the_multiplier_is_raised_until_exact(backend, monkeypatch
     assert penalties == sorted(penalties)
 
 
-
 def test_the_curved_subproblems_multipliers_do_not_lower_the_penalty():
     """The curved subproblem holds its working rows partly by its augmentation, so its own multipliers understate
     what the rows need: the weight follows only the other subproblems' multipliers (measured on a minimum-fuel
@@ -319,6 +318,7 @@ def test_the_curved_subproblems_multipliers_do_not_lower_the_penalty():
     state.augmented = False  # the same multipliers from a linear subproblem or Newton's step
     algo._relax_penalty(state)
     assert state.penalty == pytest.approx(PenaltyPolicy.from_settings(SCPSettings()).floor * start)
+
 
 # --- 4. backend failures ------------------------------------------------------------------------
 
