@@ -200,7 +200,10 @@ class DenseChecker:
         N = program.N
         node_times = program.final_time(z) * program.node_shares()
         interval = np.clip(np.searchsorted(node_times, track.t, side="right") - 1, 0, N - 1)
-        path, bounds, cone = program.margins.path.copy(), program.margins.bounds.copy(), program.margins.cone.copy()
+        # this round's margins, row by row: a node shared by two broken intervals takes the larger, not their sum
+        # (a sum tightens every node twice as much as the midpoints beside it, and the plan zigzags between them)
+        path, bounds, cone = (np.zeros_like(m) for m in (program.margins.path, program.margins.bounds,
+                                                         program.margins.cone))
         nx = program.nx
         pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
         broken_equality = False
@@ -219,16 +222,18 @@ class DenseChecker:
                     rows = [r for r, (point, i, j) in enumerate(table) if j == index and (
                         (point in ("mid", "sample") and i == k) or (point == "node" and i in (k, k + 1)
                                                                    and not pinned.get(i)))]
-                    target[rows] += margin
+                    target[rows] = np.maximum(target[rows], margin)
                 else:
                     state, upper = index
                     fixed = {0: p.states[state].initial is not None, N: p.states[state].final is not None}
                     nodes = [node for node in (k, k + 1) if not fixed.get(node)]
-                    bounds[[node * nx + state for node in nodes]] += margin
+                    entries = [node * nx + state for node in nodes]
+                    bounds[entries] = np.maximum(bounds[entries], margin)
         old = program.margins
-        if all(np.array_equal(a, b) for a, b in ((path, old.path), (bounds, old.bounds), (cone, old.cone))):
+        if not any(np.any(added > 0) for added in (path, bounds, cone)):
             # nothing to tighten: a broken path equality asks for a finer grid; anything else stays broken
             return self.refine(program, z, check) if broken_equality else None
+        path, bounds, cone = old.path + path, old.bounds + bounds, old.cone + cone
         largest = max(path.max(initial=0.0), bounds.max(initial=0.0), cone.max(initial=0.0))
         return Repair(program.with_margins(Margins(path, bounds, worst_now, cone)), z,
                       f"path constraints and state bounds tightened where the dense check broke them (largest "
