@@ -123,6 +123,45 @@ def test_periodic_control_values_are_unwrapped_without_changing_what_the_dynamic
         p.control("psi", bounds=(-1.0, 1.0), period=2 * math.pi)
 
 
+def zermelo(heading_period: float | None = None) -> Problem:
+    """Zermelo's ship (Bryson & Ho 1975, Sec. 2.7): unit speed through the current -y, to the origin in least time."""
+    p = Problem("zermelo")
+    x = p.state("x", initial=3.66, final=0.0)
+    y = p.state("y", initial=-1.86, final=0.0)
+    theta = p.control("theta", period=heading_period)
+    p.dynamics({x: ca.cos(theta) - y, y: ca.sin(theta)})
+    p.final_time(bounds=(0.1, 20.0))
+    p.minimize_time()
+    p.transcription(50)
+    return p
+
+
+def test_an_unbounded_control_seen_only_through_sines_and_cosines_is_an_angle_without_being_told():
+    """Stated without a period, Zermelo's heading is recognized as an angle: its plan is unwrapped before it is
+    flown, so the first plan is verified as it stands and its time is IPOPT's on the same transcription. (Not
+    recognized, the first plan wrapped from 3.02 to -3.16 rad between two nodes, and five repair rounds took 50 SCP
+    iterations; IPOPT takes 22.)"""
+    program = transcribe(zermelo())
+    assert program.control_periods == (2 * math.pi,)
+    solution = zermelo().solve()
+    assert solution.ok and len(solution.repair_rounds) == 1, solution.message
+    assert np.max(np.abs(np.diff(solution.nodes.columns["theta"]))) < 0.5  # flown as one turning heading
+    answer = solve_with_ipopt(program)
+    assert solution.figures.final_time_s == pytest.approx(program.final_time(answer.z), rel=1e-6)
+
+
+@pytest.mark.parametrize("statement", ["bounded", "linear too", "energy"])
+def test_a_control_that_a_turn_changes_is_not_an_angle(statement):
+    p = Problem("not-an-angle")
+    x = p.state("x", initial=0.0, final=1.0)
+    u = p.control("u", bounds=(-4.0, 4.0) if statement == "bounded" else None)
+    p.dynamics({x: ca.cos(u) + (0.1 * u if statement == "linear too" else 0.0)})
+    p.final_time(fixed=2.0)
+    p.minimize_energy() if statement == "energy" else p.minimize_terminal(-x)
+    p.transcription(4)
+    assert transcribe(p).control_periods == (None,)
+
+
 def test_a_state_of_unstated_size_is_scaled_by_what_its_rate_can_do():
     """Particle steering's y1 (no bound, boundary value 0) moves at y3, up to 45 on the straight-line guess, over the
     guessed 1 s; y4 at 100 sin(u) across the angle's range."""

@@ -127,7 +127,9 @@ class Problem:
         direction) lets the control turn through any angle: the collocation sees its values only through those
         functions, so a plan may hold a node's value and its neighbour's a whole turn apart; before the plan is
         flown and tabulated, each value is shifted by whole periods to within half a period of the one before it
-        in time, which changes no value the dynamics see. A periodic control has no bounds."""
+        in time, which changes no value the dynamics see. A periodic control has no bounds. An unbounded control
+        stated without a period gets one of 2 pi when a whole turn of it changes nothing the dynamics and path
+        constraints evaluate (:mod:`convexguid.ocp.periodic`)."""
         variable = self._variable("control", name, bounds, None, None, scale, guess, unit)
         if period is not None:
             period = number(f"{self.name}: control {name!r}: period", period, allow_none=False)

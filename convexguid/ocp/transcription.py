@@ -39,6 +39,7 @@ from convexguid.ocp.curvature import ElementCurvature, interval_of_rows
 from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.guess import flown_free_states
 from convexguid.ocp.parts import DERIVATIVES, AffineCones, Margins, SparsityPattern, SymbolicNLP
+from convexguid.ocp.periodic import control_periods
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
 from convexguid.scp.problem import ConstraintBlock, CurvatureModel, Evaluation, LinearConstraints, OutputConstraints
 
@@ -132,10 +133,15 @@ class Transcription:
         """The instant (a share of the final time) each control value stands for, in the order of ``z``."""
         raise NotImplementedError
 
+    @cached_property
+    def control_periods(self) -> tuple[float | None, ...]:
+        """Each control's period, stated or recognized (:func:`~convexguid.ocp.periodic.control_periods`)."""
+        return control_periods(self.problem)
+
     def unwrapped(self, z: np.ndarray) -> np.ndarray:
-        """``z`` with every periodic control's values shifted by whole periods to within half a period of the value
-        before them in time (:meth:`~convexguid.ocp.problem.Problem.control`); the same point of the program."""
-        periodic = [(j, v.period) for j, v in enumerate(self.problem.controls) if v.period is not None]
+        """``z`` with every periodic control's values (stated or recognized: :mod:`convexguid.ocp.periodic`) shifted
+        by whole periods to within half a period of the value before them in time; the same point of the program."""
+        periodic = [(j, period) for j, period in enumerate(self.control_periods) if period is not None]
         if not periodic:
             return z
         z = np.array(z, dtype=float)
