@@ -306,3 +306,37 @@ def test_a_wall_broken_along_an_arc_is_tightened_evenly_and_holds_after_one_repa
     solution = problem.solve()
     assert solution.ok, solution.message
     assert len(solution.repair_rounds) <= 3
+
+
+def hypersensitive(mesh_tolerance: float | None = None) -> Problem:
+    """Rao & Mease's hypersensitive problem as PROPT states it: x' = -x^3 + u from 1 to 1.5 over 10, minimize the
+    integral of x^2 + u^2; published 6.7239254 (PROPT's example)."""
+    p = Problem("hypersensitive")
+    x = p.state("x", initial=1.0, final=1.5)
+    u = p.control("u")
+    p.dynamics({x: -x**3 + u})
+    p.final_time(fixed=10.0)
+    p.minimize_integral(x**2 + u**2, name="J")
+    p.transcription(50, mesh_tolerance=mesh_tolerance)
+    return p
+
+
+def test_a_mesh_tolerance_refines_until_every_interval_is_that_accurate_and_reaches_the_continuous_optimum():
+    """On 50 equal intervals the plan is verified (feasible as flown) at 0.25% above the published optimum: the
+    grid is too coarse in the two boundary layers. Asked for local errors within 1e-5, the grid is split there and
+    the cost comes within 1e-4 of the published figure."""
+    coarse = hypersensitive().solve()
+    assert coarse.ok and len(coarse.nodes.t) == 51
+    assert coarse.objective == pytest.approx(6.7239254, rel=5e-3) and coarse.objective > 6.7239254 * (1 + 1e-3)
+    fine = hypersensitive(mesh_tolerance=1e-5).solve()
+    assert fine.ok, fine.message
+    local = {c.name: c for c in fine.verification.checks}["local_error"]
+    assert local.worst <= 1e-5 and len(fine.nodes.t) > 51
+    assert fine.objective == pytest.approx(6.7239254, rel=1e-4)
+    steps = np.diff(fine.nodes.t)
+    assert steps[0] < 0.2 and steps[-1] < 0.2 and np.max(steps) == pytest.approx(0.2)  # split at the ends only
+
+
+def test_a_mesh_tolerance_that_is_not_positive_is_one_line_naming_it():
+    with pytest.raises(SpecError, match="mesh_tolerance: expected a positive number"):
+        hypersensitive(mesh_tolerance=0.0)

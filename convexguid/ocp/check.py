@@ -24,6 +24,7 @@ from convexguid.ocp.boundary import boundary_errors
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.mesh import (
     JUMP_SHARE,
+    LOCAL_ERROR_TOLERANCE,
     control_jumps,
     held_control,
     interval_errors,
@@ -175,9 +176,13 @@ class DenseChecker:
         final_errors = self._final_errors(program, track)
         worst_final = max(final_errors.values(), default=0.0)
         passed = worst_final <= FINAL_TOLERANCE and not broken
-        verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed,
-                                    {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE,
-                                     "path_equality": EQUALITY_TOLERANCE},
+        tolerances = {"final_state": FINAL_TOLERANCE, "path": PATH_TOLERANCE, "path_equality": EQUALITY_TOLERANCE}
+        if p.mesh_tolerance is not None:  # the accuracy the statement asks of every interval
+            local = float(np.max(interval_errors(program, z)))
+            checks.append(ConstraintCheck("local_error", local, p.mesh_tolerance, "max"))
+            tolerances["local_error"] = p.mesh_tolerance
+            passed = passed and local <= p.mesh_tolerance
+        verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed, tolerances,
                                     flight + (() if passed else jumping_controls(program, z)))
         return Check(verification, track)
 
@@ -256,7 +261,8 @@ class DenseChecker:
                                              f"{JUMP_SHARE:.0%} of its range between neighbouring values: an "
                                              "optimum of the collocation that chatters), started "
                                              + ("from the plan's nodes" if carry else "from the first guess"))
-            plan = plan_refinement(program, z, self._broken_intervals(program, check), MAX_INTERVALS)
+            tolerance = min(LOCAL_ERROR_TOLERANCE, program.problem.mesh_tolerance or LOCAL_ERROR_TOLERANCE)
+            plan = plan_refinement(program, z, self._broken_intervals(program, check), MAX_INTERVALS, tolerance)
             if plan is None:
                 return None
             fine, start = refined_program(program, z, plan)

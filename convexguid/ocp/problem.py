@@ -60,6 +60,7 @@ class Problem:
         self.guess_nodes: tuple[np.ndarray, np.ndarray] | None = None
         self.control_interpolation = "quadratic"
         self.intervals = 30
+        self.mesh_tolerance: float | None = None
         self.method = "hermite-simpson"
         self.substeps = 4
         self.time = ca.SX.sym("t")
@@ -368,14 +369,21 @@ class Problem:
         return cost
 
     def transcription(self, intervals: int, method: str = "hermite-simpson", substeps: int = 4,
-                      control: str = "quadratic") -> None:
+                      control: str = "quadratic", mesh_tolerance: float | None = None) -> None:
         """``intervals`` equal intervals, transcribed by ``method``: ``"hermite-simpson"`` (collocation, the control
         quadratic between nodes through a midpoint value, or with ``control="linear"`` linear between the node
         values), ``"zoh"`` (the control constant on each interval), ``"foh"`` (linear between nodes) or
         ``"chebyshev"`` (pseudospectral collocation on ``intervals + 1`` mapped Chebyshev nodes); the holds
         integrate the dynamics across each interval by ``substeps`` Runge-Kutta steps; ``"flow"`` holds the control
         constant on each interval as ``"zoh"`` does but maps each node to the next by the closed-form flow
-        (:meth:`flow`)."""
+        (:meth:`flow`).
+
+        ``mesh_tolerance`` asks for accuracy beyond the dense check's: the plan is verified only when every
+        interval's local error (the state flown across it from its start node, less its end node, in the states'
+        scales) is within it, and the grid is refined where it is not (Betts 2010, Sec. 4.7). Without it the grid
+        is refined only where the plan fails the check. The optimum of a coarse grid can be feasible as flown and
+        still short of the continuous one: Rao and Mease's hypersensitive problem (tf = 10) costs 6.740452 on 50
+        intervals, 0.25% above the published 6.7239254; with ``mesh_tolerance=1e-5``, 6.724332 on 56."""
         where = f"{self.name}: transcription"
         fewest = 1 if method == "flow" else 2  # a closed-form flow is exact across one interval
         if isinstance(intervals, bool) or not isinstance(intervals, int) or intervals < fewest:
@@ -387,7 +395,12 @@ class Problem:
         if control not in ("quadratic", "linear") or (control == "linear" and method != "hermite-simpson"):
             raise SpecError(f"{where}: control: expected 'quadratic' or 'linear' with hermite-simpson (got "
                             f"{control!r} with {method})")
+        if mesh_tolerance is not None:
+            mesh_tolerance = number(f"{where}: mesh_tolerance", mesh_tolerance)
+            if not mesh_tolerance > 0:
+                raise SpecError(f"{where}: mesh_tolerance: expected a positive number (got {mesh_tolerance!r})")
         self.intervals, self.method, self.substeps, self.control_interpolation = intervals, method, substeps, control
+        self.mesh_tolerance = mesh_tolerance
 
     # --- checks and solve -------------------------------------------------------------------------------------
     def check(self) -> None:
