@@ -1,29 +1,22 @@
 """Assembly of the convex subproblem with a sparsity pattern fixed once.
 
-Subproblem variables are ``z = [d, y, s_o, s_g, t, s_c]``: the step ``d`` from the
-iterate ``x``, the lifted residuals ``y`` (linearized :math:`r`), and nonnegative
-slacks on the output constraints, on the linearized inequalities, around the
-linearized equalities and on each second-order cone (an exact l1 penalty, so every
-subproblem is feasible):
+Its variables are ``z = [d, y, s_o, s_g, t, s_c]``: the step ``d`` from the iterate ``x``, the lifted residuals ``y``
+(linearized :math:`r`), and nonnegative slacks on the output constraints, the linearized inequalities, around the
+linearized equalities and on each second-order cone (an exact l1 penalty, so every subproblem is feasible):
 
 .. math::
 
     \\min\\; y^T W y + c^T d + \\rho\\,(1^T s_o + 1^T s_g + 1^T t)
 
-    \\text{s.t.}\\quad A d = b - A x,\\quad \\nabla r\\, d - y = -r,\\quad G d \\le h - G x,\\quad
-    M y - s_o \\le m,
+    \\text{s.t.}\\quad A d = b - A x,\\quad \\nabla r\\, d - y = -r,\\quad G d \\le h - G x,\\quad M y - s_o \\le m,
 
     g + \\nabla g\\, d \\le s_g,\\quad |e + \\nabla e\\, d| \\le t,\\quad
-    \\|v_{1:} + F_{1:} d\\| \\le v_0 + F_0 d + s_c,\\quad
-    s_o, s_g, t, s_c \\ge 0,\\quad |d_i| \\le \\Delta\\,\\sigma_i
+    \\|v_{1:} + F_{1:} d\\| \\le v_0 + F_0 d + s_c,\\quad s_o, s_g, t, s_c \\ge 0,\\quad |d_i| \\le \\Delta\\,\\sigma_i
 
-with :math:`\\Delta` the trust radius, :math:`\\sigma` the variable scale and :math:`v = Fx + f` each cone's
-affine map (:class:`~convexguid.scp.problem.ConeBlock`, exact: no linearization); the backend sees
-the scaled step :math:`d_i/\\sigma_i` (columns scaled), so metres and radians weigh alike. The
-Hessian is diagonal and the dense Jacobian of :math:`r` appears once, not in every
-bound row, which keeps the KKT factorisation cheap. :class:`SubproblemAssembler`
-maps block values straight into the CSC ``data`` arrays, so each iteration only
-copies numbers and the backend keeps its symbolic factorisation.
+with :math:`\\Delta` the trust radius, :math:`\\sigma` the variable scale and :math:`v = Fx + f` each cone's affine map
+(:class:`~convexguid.scp.problem.ConeBlock`, exact); the backend sees the scaled step :math:`d_i/\\sigma_i`.
+:class:`SubproblemAssembler` maps block values straight into the CSC ``data`` arrays, so each iteration only copies
+numbers (why this form: docs/engine.md, 'Subproblem assembly: lifted and condensed').
 """
 
 from __future__ import annotations
@@ -78,14 +71,11 @@ class _Pattern:
 
 
 class SubproblemRows:
-    """The constraint rows the lifted and the condensed subproblem share, with their pattern fixed once.
-
-    The structure (sizes, and the sparsity of every Jacobian block) is read from the first :class:`Evaluation`: a
-    block whose Jacobian is a dense array gets a dense pattern; one given as ``scipy.sparse.coo_matrix`` keeps its
-    pattern, and every later evaluation must list the same ``(row, col)`` entries in the same order. ``lifted``
-    keeps the residuals as variables (``J d - y = -r`` rows, the output constraints on ``y``); otherwise the output
-    constraints take ``M J`` on the step, dense.
-    """
+    """The constraint rows the lifted and the condensed subproblem share, their pattern fixed once from the first
+    :class:`Evaluation`: a dense Jacobian block gets a dense pattern, a ``scipy.sparse.coo_matrix`` keeps its own (every
+    later evaluation must list the same ``(row, col)`` entries in the same order). ``lifted`` keeps the residuals as
+    variables (``J d - y = -r`` rows, the output constraints on ``y``); otherwise the output constraints take ``M J``
+    on the step, dense."""
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
@@ -137,8 +127,8 @@ class SubproblemRows:
     def constraints(self, x: np.ndarray, ev: Evaluation, radius: float | np.ndarray, head: list[np.ndarray],
                     head_rhs: list[np.ndarray]) -> tuple[sp.csc_matrix, np.ndarray]:
         """``(A, b)`` about ``x`` (``radius``: the box on the scaled step, or its upper then lower limits per variable):
-        ``head`` the values of the rows up to the output constraints' slacks (in pattern
-        order), ``head_rhs`` their right-hand sides after ``A``'s and ``G``'s (which this fills in)."""
+        ``head`` the values of the rows up to the output constraints' slacks (in pattern order), ``head_rhs`` their
+        right-hand sides after ``A``'s and ``G``'s (which this fills in)."""
         lin, fixed = self.linear, self._fixed
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
         A = self._a_pattern.matrix([
@@ -167,9 +157,8 @@ class SubproblemRows:
 
 class SubproblemAssembler(SubproblemRows):
     """Builds the lifted trust-region subproblem for one program's block structure (:class:`SubproblemRows`). With
-    ``curvature`` (the upper triangle ``(rows, cols)`` of a pattern) the Hessian gets that block on ``d``: the
-    convex model of the Lagrangian's curvature (:class:`~convexguid.scp.problem.CurvatureModel`).
-    """
+    ``curvature`` (the upper triangle ``(rows, cols)`` of a pattern) the Hessian gets that block on ``d``: the convex
+    model of the Lagrangian's curvature (:class:`~convexguid.scp.problem.CurvatureModel`)."""
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
@@ -208,14 +197,10 @@ class SubproblemAssembler(SubproblemRows):
 
 @dataclass(frozen=True)
 class DualLayout:
-    """Where each constraint's rows sit in a subproblem, shared by the lifted and the condensed form.
-
-    Zero cone: ``A`` (``linear_equalities`` rows), then the lifted form's ``J d - y = -r`` rows
-    (``residuals``; none in the condensed form). Nonnegative cone: ``G``, the output constraints, the
-    linearized inequalities, the linearized equalities as ``+`` and ``-`` rows, then slacks and trust region.
-    The equality multiplier is the ``+`` row's dual less the ``-`` row's. Second-order cones: the last
-    ``cone_rows`` rows.
-    """
+    """Where each constraint's rows sit in a subproblem, lifted or condensed. Zero cone: ``A`` (``linear_equalities``
+    rows), then the lifted form's ``J d - y = -r`` rows (``residuals``). Nonnegative cone: ``G``, the output
+    constraints, the linearized inequalities, the linearized equalities as ``+`` and ``-`` rows (the multiplier is the
+    ``+`` row's dual less the ``-`` row's), then slacks and trust region. Second-order cones: the last ``cone_rows``."""
 
     linear_equalities: int
     residuals: int
@@ -271,8 +256,7 @@ def _add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...]
 
 def csc_index_arrays(indices: np.ndarray, indptr: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """A CSC pattern's ``(indices, indptr)`` in the integer type ``scipy.sparse`` keeps for it (int32 where the
-    sizes allow), so the matrix made from them at every iteration takes them as they are, neither converted nor
-    scanned (a third of its construction time on a condensed subproblem of 24,000 entries)."""
+    sizes allow), so the matrix made at every iteration takes them neither converted nor scanned (docs/engine.md)."""
     fits = max(*shape, len(indices)) <= np.iinfo(np.int32).max  # scipy's rule for the (data, indices, indptr) form
     dtype = np.int32 if fits else np.int64
     return np.asarray(indices, dtype=dtype), np.asarray(indptr, dtype=dtype)

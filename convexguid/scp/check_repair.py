@@ -1,25 +1,15 @@
 """The check-repair-resolve loop every planned family shares.
 
-A converged SCP iterate satisfies its constraints at the points the program imposes them;
-what happens between them, and whether the discretized dynamics match the true ones, only a
-dense re-propagation tells. :func:`solve_verified` runs
-
-    solve -> dense check -> repairs the family proposes -> warm re-solve from the last plan
-
-until the check passes or the repair budget is spent. The family supplies two things
-(:class:`PlanChecker`): ``check(program, x)``, its dense verification of the plan ``x``, and
-``repair(program, x, check, attempt)``, a new program (tightened constraints, more check
-points, a finer mesh) with the plan carried over as its start, or ``None`` when it has nothing
-to offer. Every round is recorded (:class:`RepairRound`), so the summary shows what was repaired
-and the figures after it.
-
-Statuses: ``converged`` only when the SCP converged and the dense check passed; ``unverified`` when the SCP
-converged (or stopped feasible without proving optimality, itself ``unverified``) but the check still fails when
-the budget runs out or no repair is left, naming the worst violations, or when a repaired program (tightened,
-refined) ends ``infeasible``: that certificate is of the repair, not of the problem as stated, and the message names
-the repair; otherwise the SCP's own status (``infeasible`` with its certificate, ``max_iterations``,
-``solver_error``). A feasible plan not proved optimal is repaired as a converged one is when its check fails (the
-grid may be what keeps the SCP from its KKT point), and stays ``unverified`` when its check passes.
+A converged SCP iterate meets its constraints only where the program imposes them, so :func:`solve_verified` runs
+solve, dense check, the repairs the family proposes and a warm re-solve from the last plan until the check passes or
+the repair budget is spent. The family (:class:`PlanChecker`) supplies ``check(program, x)``, its dense verification of
+the plan ``x``, and ``repair(program, x, check, attempt)``, a new program (tightened constraints, more check points, a
+finer mesh) with the plan carried over as its start, or ``None``; every round is recorded (:class:`RepairRound`).
+Statuses: ``converged`` only when the SCP converged and the dense check passed; ``unverified`` when the SCP ended
+``converged`` or ``unverified`` but the check still fails when the budget runs out or no repair is left (the worst
+violations named), when a repaired program ends ``infeasible`` (a certificate of the repair, not of the problem as
+stated), or when a plan not proved optimal passes its check (a failing one is repaired as a converged one is);
+otherwise the SCP's own status (``infeasible`` with its certificate, ``max_iterations``, ``solver_error``).
 """
 
 from __future__ import annotations
@@ -145,8 +135,7 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
         if on_round is not None:
             on_round(rounds[-1])
         if result.status == "infeasible" and attempt > 0:
-            # the certificate is of the repaired program, whose constraints a repair tightened or whose grid it
-            # changed: the problem as stated was not proved infeasible
+            # a certificate of the repaired program (tightened, or regridded), not of the problem as stated
             return VerifiedSolve(program, result, check, "unverified",
                                  f"after the repair '{what}' the SCP found no feasible point ({result.message}); "
                                  "the problem as stated is not proved infeasible", rounds)
@@ -174,9 +163,7 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
 
 
 def grown_margin(excess: float, attempt: int, floor: float) -> float:
-    """How much to tighten a bound whose dense check saw ``excess`` beyond it, in round ``attempt``.
-
-    The margin starts at the excess plus ``floor`` and grows by half the excess each round
-    that did not clear it, so a repair that undershoots converges instead of repeating.
-    """
+    """How much to tighten a bound whose dense check saw ``excess`` beyond it, in round ``attempt``: the margin starts
+    at the excess plus ``floor`` and grows by half the excess each round that did not clear it, so a repair that
+    undershoots converges instead of repeating."""
     return excess * (1.0 + 0.5 * attempt) + floor * (1 + attempt)

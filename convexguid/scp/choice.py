@@ -1,23 +1,13 @@
 """Which subproblem assembly and which backend an SCP run uses (``backend: auto`` and explicit names).
 
-The lifted subproblem (:mod:`convexguid.scp.assembly`) suits a sparse interior-point solver: the
-Jacobian of the residuals appears once in a large sparse KKT system. The condensed one
-(:mod:`convexguid.scp.condensed`) suits a dense active-set solver: the residuals are substituted
-and the QP has the step's size. ``auto`` decides once per run, from the program's first
-evaluation:
-
-* the condensed subproblem with DAQP when the program is small (at most
-  :data:`~convexguid.backends.registry.DENSE_MAX_VARIABLES` variables), has residuals with weight
-  (something to condense: a Hessian for the active-set solver), and its Jacobians (residuals and
-  nonlinear constraints) hold at least
-  :data:`~convexguid.backends.registry.DENSE_MIN_DENSITY` nonzeros; a DAQP answer that is not
-  ``optimal`` is solved again by Clarabel;
-* otherwise the lifted subproblem with Clarabel.
-
-A program with second-order cones (:class:`~convexguid.scp.problem.ConeBlock`) always gets the lifted subproblem,
-with Clarabel under ``auto``; a backend that cannot take cones says so when it is set up. An explicit name keeps
-today's behaviour: the lifted subproblem for ``clarabel``, ``osqp`` and ``qpsolvers:*``, the condensed one for the
-dense backend ``daqp``.
+``auto`` decides once per run, from the program's first evaluation: the condensed subproblem
+(:mod:`convexguid.scp.condensed`) with the dense active-set solver DAQP when the program is small (at most
+:data:`~convexguid.backends.registry.DENSE_MAX_VARIABLES` variables), has residuals with weight (a Hessian for DAQP)
+and Jacobians (residuals and nonlinear constraints) with at least
+:data:`~convexguid.backends.registry.DENSE_MIN_DENSITY` nonzeros, Clarabel re-solving a DAQP answer that is not
+``optimal``; otherwise, and always with second-order cones, the lifted subproblem (:mod:`convexguid.scp.assembly`)
+with Clarabel. An explicit name keeps today's behaviour: the lifted subproblem for ``clarabel``, ``osqp`` and
+``qpsolvers:*``, the condensed one for the dense backend ``daqp``.
 """
 
 from __future__ import annotations

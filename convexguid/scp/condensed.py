@@ -1,35 +1,23 @@
 """The trust-region subproblem with the lifted residuals eliminated (the condensed form).
 
-:mod:`convexguid.scp.assembly` keeps :math:`y = r + J d` as variables so that the dense
-Jacobian :math:`J` appears once in a large sparse KKT system. When :math:`n` is small and the
-Jacobians are dense, the opposite is cheaper: substitute :math:`y` and solve a small dense QP in
-the step alone. With the scaled step :math:`u = S^{-1} d` (:math:`S = \\operatorname{diag}\\sigma`)
-the variables are ``z = [u, s_o, s_g, t, s_c]`` and
+When :math:`n` is small and the Jacobians are dense, substituting the lifted :math:`y = r + J d` of
+:mod:`convexguid.scp.assembly` leaves a small dense QP in the scaled step :math:`u = S^{-1} d`
+(:math:`S = \\operatorname{diag}\\sigma`), with variables ``z = [u, s_o, s_g, t, s_c]``:
 
 .. math::
 
     \\min\\; u^T S (J^T W J + \\tfrac12 H) S u + (2 J^T W r + c)^T S u + r^T W r
     + \\rho\\,(1^T s_o + 1^T s_g + 1^T t + 1^T s_c)
 
-    \\text{s.t.}\\quad A S u = b - A x,\\quad G S u \\le h - G x,\\quad
-    M J S u - s_o \\le m - M r,
+    \\text{s.t.}\\quad A S u = b - A x,\\quad G S u \\le h - G x,\\quad M J S u - s_o \\le m - M r,
 
     g + \\nabla g\\, S u \\le s_g,\\quad |e + \\nabla e\\, S u| \\le t,\\quad
-    \\|v_{1:} + F_{1:} S u\\| \\le v_0 + F_0 S u + s_c,\\quad
-    s_o, s_g, t, s_c \\ge 0,\\quad |u_i| \\le \\Delta,
+    \\|v_{1:} + F_{1:} S u\\| \\le v_0 + F_0 S u + s_c,\\quad s_o, s_g, t, s_c \\ge 0,\\quad |u_i| \\le \\Delta,
 
-which is the lifted subproblem with :math:`y` substituted: the same optimal step and value (the
-constant :math:`r^T W r` rides along in :attr:`ConicProgram.constant`, so
-``program.objective(z)`` is the model value the engine compares with the merit). Hard linear
-constraints stay hard; slacks stay exactly where the lifted form has them, so the two
-subproblems are the same problem, and the row blocks come in the lifted form's order (less its
-``J d - y = -r`` rows). :class:`CondensedAssembler` has the interface of
-:class:`~convexguid.scp.assembly.SubproblemAssembler`.
-
-The program is handed over in the usual CSC form with a pattern fixed once (the ``u`` columns
-of every row dense, the slacks' identity blocks sparse), so any backend takes it; the dense
-backend (:class:`~convexguid.backends.dense.DaqpBackend`) reads the slack columns off the
-pattern and solves in ``u`` alone, which is what makes this form fast.
+the lifted subproblem with :math:`y` substituted: the same step and value (:math:`r^T W r` rides along in
+:attr:`ConicProgram.constant`, so ``program.objective(z)`` is the model value), the same slacks, and its rows in the
+lifted order less ``J d - y = -r``. :class:`CondensedAssembler` has the interface of
+:class:`~convexguid.scp.assembly.SubproblemAssembler`; the dense backend solves it in ``u`` alone (docs/engine.md).
 """
 
 from __future__ import annotations
@@ -55,12 +43,9 @@ class CurvedTerms:
 
 
 class CondensedAssembler(SubproblemRows):
-    """Builds the condensed trust-region subproblem (same arguments and methods as ``SubproblemAssembler``).
-
-    Row layout of ``A z + s = b``: the lifted form's (:class:`~convexguid.scp.assembly.SubproblemRows`) less its
-    ``J d - y = -r`` rows, the output rows ``M J`` dense on ``u``. ``P`` is dense on ``u`` and zero on the slacks.
-    A program with cones goes to a conic backend (the curved subproblem's Clarabel); the dense one takes none.
-    """
+    """Builds the condensed trust-region subproblem (the interface of ``SubproblemAssembler``): the lifted form's rows
+    less ``J d - y = -r``, the output rows ``M J`` dense on ``u``; ``P`` dense on ``u``, zero on the slacks. A program
+    with cones goes to a conic backend (the curved subproblem's Clarabel); the dense one takes none."""
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
@@ -80,10 +65,9 @@ class CondensedAssembler(SubproblemRows):
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
               hessian: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
         """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on the
-        pattern ``curvature``, positive semidefinite).
-
-        ``curved`` replaces the model's whole Hessian in ``u`` (scaled, positive semidefinite, the Gauss-Newton part
-        included) and adds its linear and constant terms (:mod:`convexguid.scp.curved`)."""
+        pattern ``curvature``, positive semidefinite). ``curved`` replaces the model's whole Hessian in ``u`` (scaled,
+        positive semidefinite, Gauss-Newton part included) and adds its linear and constant terms
+        (:mod:`convexguid.scp.curved`)."""
         n, scale = self.n, self.scale
         r = ev.residuals
         jac = ev.residual_jacobian

@@ -1,33 +1,17 @@
 """The curved subproblem: the trust-region QP with the Lagrangian's Hessian, made convex (the end game's SQP step).
 
-Far from a solution the engine's subproblem carries the program's own sparse curvature model (or none), which
-keeps it robust and cheap. Near a feasible point that model is not enough wherever the curvature that matters lives
-only in the coupling of the constraints: a bilinear term (catalyst mixing's :math:`u x`, a quaternion's
-:math:`\\Omega(\\omega) q`) is indefinite in every interval, yet positive along the dynamics, and a model made
-convex interval by interval keeps none of it; the iteration then converges like a first-order method, its steps
-pinned to the trust region (measured on COPS' catalyst mixing: 112 iterations to ``unverified``, 3.9e-5 short).
-So once the iterate is within :data:`CURVED_VIOLATION` feasibility tolerances of feasibility on a program of at most
-:data:`CURVED_SIZE` variables and the last :data:`CRAWL` linear steps reached their trust region (the model had no
-curvature to stop them), and at any feasible stall short of the KKT tolerance, the engine solves the QP of
-sequential quadratic programming instead, whose solver picks the active set itself:
-
-.. math::
-
-    \\min_u\\; \\nabla f^T S u + \\tfrac12 u^T \\bar H u + \\rho \\sum(\\text{slacks})
-    \\quad\\text{s.t. the linearized constraints and } |u_i| \\le \\Delta ,
-
-with :math:`\\bar H` the scaled Hessian of the Lagrangian (Gauss-Newton part included, weighted by the last
-subproblem's multipliers) made positive semidefinite: first :math:`H + \\gamma A_W^T A_W` over the working set's
-rows :math:`A_W`, which leaves the model unchanged on the directions those constraints leave free and, for
-:math:`\\gamma` large enough, makes the Hessian positive definite wherever the reduced Hessian is (Finsler's lemma;
-Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.3), then any eigenvalue still below a small floor
-raised to it (a reduced Hessian that is indefinite: Nocedal & Wright Sec. 3.4). The QP is the condensed one
-(:mod:`convexguid.scp.condensed`, the residuals substituted, a dense Hessian in the step) and goes to the run's own
-dense solver, or to Clarabel (:meth:`CurvedSubproblem.backend_name`). Second-order cones stay in it exact, as in
-every subproblem (one penalized slack a cone): measured on the nonconvex powered descent (examples/powered_descent.py,
-its thrust and glide-slope cones), ``unverified`` after 156 iterations without the curved step there, converged and
-verified in 40 with it, at IPOPT's final mass. Without any curved step the classics benchmark left catalyst mixing
-and Goddard's rocket ``unverified`` and OpenSCvx's 6-DoF descent at ``max_iterations``.
+Near a feasible point a program's sparse curvature model misses the curvature that lives only in the coupling of the
+constraints (a bilinear term such as catalyst mixing's :math:`u x` or a quaternion's :math:`\\Omega(\\omega) q`), and
+the steps stay pinned to the trust region. So at a feasible stall short of the KKT tolerance, and on a program of at
+most :data:`CURVED_SIZE` variables within :data:`CURVED_VIOLATION` tolerances of feasibility once :data:`CRAWL` linear
+steps in a row reached the trust region, the engine solves the QP of sequential quadratic programming instead,
+:math:`\\min_u \\nabla f^T S u + \\tfrac12 u^T \\bar H u + \\rho \\sum(\\text{slacks})` subject to the linearized
+constraints and :math:`|u_i| \\le \\Delta`. Here :math:`\\bar H` is the scaled Hessian of the Lagrangian (Gauss-Newton
+part included, last multipliers) made positive semidefinite: :math:`H + \\gamma A_W^T A_W` over the working rows,
+positive definite wherever the reduced Hessian is for :math:`\\gamma` large enough (Finsler's lemma; Nocedal & Wright,
+*Numerical Optimization*, 2nd ed., Sec. 17.3), then any eigenvalue still below a small floor raised to it (Nocedal &
+Wright Sec. 3.4). The QP is the condensed one (:mod:`convexguid.scp.condensed`), cones kept exact, on the backend of
+:meth:`CurvedSubproblem.backend_name` (docs/engine.md, 'Curved subproblem').
 """
 
 from __future__ import annotations
@@ -49,34 +33,24 @@ if TYPE_CHECKING:
 
 AUGMENTATION = 1e3
 """:math:`\\gamma` in units of the Hessian's largest entry over the working rows' median squared norm, near
-feasibility. Measured on the classics with the curved step at every iteration within :data:`CURVED_VIOLATION`
-(before it waited for a pinned step; catalyst mixing, Goddard's rocket, the hang glider: SCP iterations): at 10,
-102 (``unverified``), 29, 52; at 100, 61, 26, 51; at 1e3, 29, 23, 51; at 1e4, 26, 26, 56 (the augmentation then
-crowds out the reduced Hessian's own eigenvalues)."""
+feasibility (the fewest iterations in all of the values measured, 10 to 1e4: docs/engine.md, 'Curved subproblem')."""
 
 POLISH_AUGMENTATION = 10.0
-""":math:`\\gamma` at a feasible stall (the polish). Measured: the flat slew with its torque box and sun cone both
-active (tests/test_verified_loop.py), whose multipliers are not unique, is proved a KKT point at 10; at 1e3 its
-polish collapsed the trust region 2.1e-5 short of stationarity."""
+""":math:`\\gamma` at a feasible stall (the polish), where a larger one kept a KKT point with degenerate multipliers
+from being proved one (measured: docs/engine.md, 'Curved subproblem')."""
 
 CURVED_VIOLATION = 10.0
-"""Within this many feasibility tolerances of feasibility, a small program's pinned iterations take the curved step.
-Measured with every iteration there taking it (catalyst mixing, Goddard's rocket, the hang glider: SCP iterations;
-Betts' shuttle: its crossrange) from a violation of 1e-4, 1e-5, 1e-6 and 1e-7 (the tolerance): 13, 11, 32, and the
-shuttle at 34.0803 deg, 1.8e-3 short of Betts' figure (a lower local optimum, where IPOPT's 34.0613 is too); 18,
-12, 51; 29, 23, 51, and the shuttle at 34.14087 deg; 37, 18, 50, the shuttle the same. Waiting for a pinned step
-as well (OpenSCvx's proximity operation, examples/proxops_openscvx.py, stalled ``unverified`` after curved steps
-it did not need): 29, 33, 56."""
+"""Within this many feasibility tolerances of feasibility, a small program's pinned iterations take the curved step
+(from 1e-4, Betts' shuttle ended at a lower local optimum: docs/engine.md, 'Curved subproblem')."""
 
 CRAWL = 2
-"""Linear steps in a row that reached the trust region before the curved step takes over near feasibility. Measured:
-at 1, the flat slew (problems/cai2018_flat_attitude.yaml) took 8 iterations and 0.35 s warm, against 6 and 0.08 s;
-at 2 and 3 catalyst mixing, Goddard's rocket and the hang glider took the same 29, 33 and 56 iterations as at 1."""
+"""Linear steps in a row that reached the trust region before the curved step takes over near feasibility (at 1 the
+flat slew took longer; 2 or 3 cost three classics nothing: docs/engine.md, 'Curved subproblem')."""
 
 CURVED_SIZE = 600
-"""Largest program (variables) that takes the curved step near feasibility (once pinned): its Hessian, the
-eigendecomposition and the QP are dense. Measured from a violation of 1e-4: Betts' slew (1311 variables) took
-990 s so, against 5 s with the sparse model (the same plan); larger programs take it only at a feasible stall."""
+"""Largest program (variables) that takes the curved step near feasibility (dense Hessian, eigendecomposition
+and QP); a larger one takes it only at a feasible stall (measured: docs/engine.md, 'Curved subproblem')."""
+
 
 def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION) -> tuple[np.ndarray, float]:
     """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows``, its negative eigenvalues raised to
@@ -112,13 +86,9 @@ class CurvedModel:
 
 
 def strongly_active(working: WorkingSet, multipliers: Multipliers) -> WorkingSet:
-    """``working`` without the inequalities whose multiplier is not significant (below 1e-6 of the largest).
-
-    The augmentation :math:`\\gamma A_W^T A_W` holds each row it covers to its linearization; an inequality that
-    merely touches its bound (a keep-out cone met between check points) must stay free to leave it, or the step and
-    the multipliers bend around a constraint that does not bind (measured on the flat slew with the sun cone active:
-    stationarity 0.54 with it in).
-    """
+    """``working`` without the inequalities whose multiplier is not significant (below 1e-6 of the largest): the
+    augmentation holds each row it covers to its linearization, and a row that merely touches its bound (a keep-out
+    cone met between check points) must stay free to leave it (measured: docs/engine.md, 'Curved subproblem')."""
     significant = multipliers.significant()
     return replace(working, linear_inequality=working.linear_inequality & (multipliers.linear_inequality > significant),
                    output=working.output & (multipliers.output > significant),
@@ -135,16 +105,13 @@ class CurvedSubproblem:
 
     def backend_name(self) -> tuple[str, str | None]:
         """DAQP (Clarabel re-solving an answer it does not grade optimal) where the run's own subproblems went to it,
-        else Clarabel. Measured: the flat slew's one curved step took 75 ms on Clarabel, mostly set-up, against
-        2 ms on DAQP; the two-instrument slew's curved steps on DAQP never certified its KKT point (20 steps,
-        stationarity 4.5e-6), on Clarabel one step did."""
+        else Clarabel (why, measured: docs/engine.md, 'Curved subproblem')."""
         choice = self.algo.choice
         return ("daqp", "clarabel") if choice is not None and choice.backend == "daqp" else ("clarabel", None)
 
     def wanted(self, state: IterationState) -> bool:
         """Whether this iteration takes the curved step: at a feasible stall short of the KKT tolerance (the polish),
-        or on a small program near feasibility whose linear steps keep reaching the trust region (see the module
-        docstring)."""
+        or on a small program near feasibility whose linear steps keep reaching the trust region."""
         algo = self.algo
         near = max_violation(state.ev) <= CURVED_VIOLATION * algo.settings.feasibility_tolerance
         return bool(state.polish) or (near and state.pinned >= CRAWL and not algo.phase1
@@ -168,8 +135,7 @@ class CurvedSubproblem:
         algo = self.algo
         linear = algo.second_order.linear
         if self.assembler is None:
-            # the run's own condensed subproblem has these rows and this pattern (its curvature model is not used
-            # here: ``curved`` replaces the whole Hessian), so it is shared rather than set up a second time
+            # the run's own condensed subproblem has these rows and pattern: shared (``curved`` replaces its Hessian)
             self.assembler = algo.assembler if isinstance(algo.assembler, CondensedAssembler) else \
                 CondensedAssembler(algo.program.num_variables, state.raw, linear, algo.outputs, algo.scale,
                                    algo.cost, algo.weights)

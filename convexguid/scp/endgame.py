@@ -1,30 +1,16 @@
 """The second-order end game: Newton's step on the constraints the last subproblem found active.
 
-The convex subproblem identifies which constraints hold with equality at the solution (its
-multipliers say which), and it does so long before its first-order model has converged; what it
-cannot do is converge fast, because it carries no curvature of the constraints. Once the iterate is
-nearly feasible, the engine therefore also takes the equality-constrained quadratic step on that
-working set :math:`\\mathcal W` (the EQP step of SLQP methods: Byrd, Gould, Nocedal & Waltz, "An
-algorithm for nonlinear optimization using linear programming and equality constrained
-subproblems", Math. Prog. 100, 2004; Nocedal & Wright, *Numerical Optimization*, 2nd ed.,
-Sec. 18.1 and 18.6):
-
-.. math::
-
-    \\min_d\\; \\nabla f^T d + \\tfrac12 d^T \\nabla^2_{xx} L\\, d
-    \\quad\\text{s.t.}\\quad c_{\\mathcal W} + A_{\\mathcal W} d = 0 ,
-
-solved in the null space of :math:`A_{\\mathcal W}` (Nocedal & Wright eqs. 16.17-16.19), with
-:math:`\\nabla^2_{xx} L` the exact Hessian of the Lagrangian (:mod:`convexguid.scp.lagrangian`).
-Newton's method on the KKT conditions converges quadratically once the working set is right. The
-reduced Hessian :math:`Z^T \\nabla^2 L Z` tells whether the step is a minimizer's. Where it is not positive
-definite, its most negative eigenvalue :math:`\\lambda_1` is kept with its direction (a stationary point with
-such a direction is a saddle, not a minimum), and the step is taken with :math:`Z^T \\nabla^2 L Z + \\delta I`,
-:math:`\\delta = 1.1 |\\lambda_1|` (the inertia correction of IPOPT: Wachter & Biegler, Math. Program. 106, 2006,
-Sec. 3.1, with its shift read off the eigenvalues). Without it the linear steps crawled wherever the curvature
-is indefinite between the start and the optimum: Bryson & Ho's orbit transfer stated for minimum time took 39
-iterations against IPOPT's 18 (22 with it), COPS' hanging chain 158 (55). The engine judges the step with the same
-merit function and ratio test as any other.
+The convex subproblem finds the active constraints long before its first-order model converges, but carries none of
+their curvature. Near feasibility the engine also takes the equality-constrained quadratic step on that working set
+:math:`\\mathcal W`, :math:`\\min_d \\nabla f^T d + \\tfrac12 d^T \\nabla^2_{xx} L\\, d` s.t.
+:math:`c_{\\mathcal W} + A_{\\mathcal W} d = 0` (the EQP step of SLQP methods: Byrd, Gould, Nocedal & Waltz, "An
+algorithm for nonlinear optimization using linear programming and equality constrained subproblems", Math. Prog. 100,
+2004; Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 18.1 and 18.6), solved in the null space of
+:math:`A_{\\mathcal W}` (Nocedal & Wright eqs. 16.17-16.19) with the exact Hessian of the Lagrangian
+(:mod:`convexguid.scp.lagrangian`). Where the reduced Hessian :math:`Z^T \\nabla^2 L Z` is not positive definite its
+most negative eigenvalue :math:`\\lambda_1` is kept with its direction (a saddle's) and the step is taken with
+:math:`Z^T \\nabla^2 L Z + \\delta I`, :math:`\\delta = 1.1 |\\lambda_1|` (IPOPT's inertia correction, its shift read
+off the eigenvalues: Wachter & Biegler, Math. Program. 106, 2006, Sec. 3.1; docs/engine.md, 'Newton end game').
 """
 
 from __future__ import annotations
@@ -41,7 +27,6 @@ from convexguid.scp.problem import Evaluation, LinearConstraints, NonconvexProgr
 RANK_TOLERANCE = 1e-6
 """Rows of the working set whose pivots fall below this share of the largest are taken as dependent."""
 
-
 REGULARIZATION = 0.1
 """Where the reduced Hessian has negative curvature, :func:`newton_step` shifts it by its most negative eigenvalue
 and this share of it again."""
@@ -49,13 +34,10 @@ and this share of it again."""
 
 @dataclass(frozen=True)
 class NewtonStep:
-    """The EQP step (scaled variables), the multipliers of the working set, and the reduced Hessian's verdict.
-
-    Where the reduced Hessian is not positive definite, ``shift`` is what was added to its diagonal to make it so
-    (the step is then a regularized one, not Newton's), ``smallest_eigenvalue`` its most negative eigenvalue and
-    ``negative_direction`` the eigenvector of it (scaled, unit max-norm, with a deterministic sign). ``step`` is
-    ``None`` only when a hard bound outside the working set cut it off.
-    """
+    """The EQP step (scaled variables), the multipliers of the working set, and the reduced Hessian's verdict:
+    ``shift``, what was added to its diagonal where it is not positive definite (the step is then regularized, not
+    Newton's), its ``smallest_eigenvalue`` and ``negative_direction`` (scaled, unit max-norm, deterministic sign).
+    ``step`` is ``None`` only when a hard bound outside the working set cut it off."""
 
     step: np.ndarray | None
     multipliers: np.ndarray | None
@@ -65,12 +47,9 @@ class NewtonStep:
 
 
 def null_space_split(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(Y, Z, R, pivots)``: orthonormal bases of the range of ``rows.T`` and of the null space of ``rows``.
-
-    From the pivoted QR factorization :math:`A^T P = Q R`; rows whose pivot is below
-    :data:`RANK_TOLERANCE` of the largest are dependent on the others (a quaternion's unit norm, which the
-    dynamics keep, fixed at both ends is one such pair) and left out.
-    """
+    """``(Y, Z, R, pivots)``: orthonormal bases of the range of ``rows.T`` and of the null space of ``rows``, from the
+    pivoted QR factorization :math:`A^T P = Q R`; rows whose pivot is below :data:`RANK_TOLERANCE` of the largest
+    depend on the others (a quaternion's unit norm, kept by the dynamics, fixed at both ends) and are left out."""
     n = rows.shape[1]
     if rows.shape[0] == 0:
         return np.zeros((n, 0)), np.eye(n), np.zeros((0, 0)), np.zeros(0, dtype=int)
@@ -86,12 +65,10 @@ def least_norm_step(Y: np.ndarray, R: np.ndarray, pivots: np.ndarray, values: np
 
 
 def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, values: np.ndarray) -> NewtonStep:
-    """The EQP step for gradient ``g``, Hessian ``H``, working-set rows ``A`` and values ``c`` (all scaled).
-
-    Range part :math:`d_Y = -Y (R^T)^{-1} c_P` (the least-norm step onto the linearized working set), null-space
-    part from :math:`Z^T H Z\\, p = -Z^T (g + H d_Y)`, and multipliers from :math:`R\\, y_P = -Y^T (g + H d)` (zero on
-    the dependent rows).
-    """
+    """The EQP step for gradient ``g``, Hessian ``H``, working-set rows ``A`` and values ``c`` (all scaled): range
+    part :math:`d_Y = -Y (R^T)^{-1} c_P` (least norm onto the linearized working set), null-space part from
+    :math:`Z^T H Z\\, p = -Z^T (g + H d_Y)`, multipliers from :math:`R\\, y_P = -Y^T (g + H d)` (zero on dependent
+    rows)."""
     Y, Z, R, pivots = null_space_split(rows)
     range_step = least_norm_step(Y, R, pivots, values)
     reduced = Z.T @ hessian @ Z
@@ -120,11 +97,9 @@ def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, val
 
 @dataclass(frozen=True)
 class LocalModel:
-    """The second-order model at one iterate, in scaled variables :math:`u = S^{-1} d`.
-
-    ``hessian`` is the whole :math:`S \\nabla^2_{xx} L S` (Gauss-Newton part included), ``gradient``
-    :math:`S \\nabla f`, ``rows`` and ``values`` the working set's :math:`A S` and :math:`c`.
-    """
+    """The second-order model at one iterate, in scaled variables :math:`u = S^{-1} d`: ``hessian`` the whole
+    :math:`S \\nabla^2_{xx} L S` (Gauss-Newton part included), ``gradient`` :math:`S \\nabla f`, ``rows`` and
+    ``values`` the working set's :math:`A S` and :math:`c`."""
 
     hessian: np.ndarray
     gradient: np.ndarray
@@ -137,12 +112,9 @@ class LocalModel:
         return newton_step(self.gradient, self.hessian, self.rows, self.values if values is None else values)
 
     def correction(self, values: np.ndarray) -> np.ndarray:
-        """The least-norm scaled step :math:`-A^+ c` back onto the working set from where its values are ``values``.
-
-        Added to a trial step whose working set's values came out as ``values`` (the curvature the linear
-        model misses), it cancels them to first order: Fletcher's second-order correction in its least-norm
-        form (Nocedal & Wright eq. 18.53), which keeps the step's null-space part.
-        """
+        """The least-norm scaled step :math:`-A^+ c` back onto the working set from where its values are ``values``:
+        added to a trial step whose working set came out so, it cancels them to first order (Fletcher's second-order
+        correction in its least-norm form, Nocedal & Wright eq. 18.53)."""
         Y, _, R, pivots = null_space_split(self.rows)
         return least_norm_step(Y, R, pivots, values)
 
@@ -192,11 +164,8 @@ class SecondOrderModels:
         return replace(model, working=working, rows=rows, values=working.values(raw, self.linear, self.outputs, x))
 
     def onto_equalities(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """The scaled step ``u`` moved (least change) so that ``x + S u`` meets ``A x = b`` exactly.
-
-        The working set drops rows that depend on others to its rank tolerance; a hard boundary condition may be
-        one of them, and no later subproblem may start off it.
-        """
+        """The scaled step ``u`` moved (least change) so that ``x + S u`` meets ``A x = b`` exactly (the working set
+        may have dropped a hard boundary condition as dependent)."""
         return u + self.linear.onto_equalities(x + u * self.scale, self.scale)
 
     def broken_bounds(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:

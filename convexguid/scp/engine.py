@@ -1,43 +1,26 @@
 """The sequential convex programming iteration shared by every problem family.
 
-:class:`SCPAlgorithm` is an explicit state machine: :meth:`~SCPAlgorithm.initialize` turns a
-start point into an :class:`~convexguid.scp.state.IterationState`, and each
-:meth:`~SCPAlgorithm.step` reads as a recipe:
+:class:`SCPAlgorithm` is an explicit state machine: :meth:`~SCPAlgorithm.initialize` turns a start point into an
+:class:`~convexguid.scp.state.IterationState`, and each :meth:`~SCPAlgorithm.step`
 
-1. convexify: the nonlinear maps and their Jacobians at the iterate (already in the state);
-2. assemble the trust-region subproblem with penalized slacks, lifted (:mod:`convexguid.scp.assembly`)
-   or condensed (:mod:`convexguid.scp.condensed`) as decided once per run from the backend setting
-   and the program's first evaluation (:mod:`convexguid.scp.choice`), and solve it with the chosen
-   backend (a numerical failure retried with a smaller radius, ``max_backend_failures`` times in a row); the
-   box keeps short of a program's guarded bounds (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`);
-3. judge the step by the ratio of actual to predicted decrease of the exact-penalty merit
-
-   .. math::
-
-       \\phi(x) = f(x) + \\rho \\Big( \\sum \\max(0, g(x)) + \\sum |e(x)| \\Big),
-
-   trying a :class:`~convexguid.scp.policies.SecondOrderCorrection` when it is poor;
-4. accept or reject, update the radius (:class:`~convexguid.scp.policies.TrustRegionPolicy`);
-5. stop, or raise the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) as soon as a step shows it
-   below the multipliers, or when the iterates stall with constraints violated.
+1. convexifies: the nonlinear maps and their Jacobians at the iterate (already in the state);
+2. assembles the trust-region subproblem with penalized slacks (:mod:`convexguid.scp.choice`) and solves it (a
+   numerical failure is retried with a smaller radius);
+3. judges the step by the ratio of actual to predicted decrease of the exact-penalty merit
+   :math:`\\phi(x) = f(x) + \\rho \\big( \\sum \\max(0, g(x)) + \\sum |e(x)| \\big)`, with a
+   :class:`~convexguid.scp.policies.SecondOrderCorrection` when it is poor and else the
+   :class:`~convexguid.scp.policies.FunnelPolicy`;
+4. accepts or rejects, and updates the radius (:class:`~convexguid.scp.policies.TrustRegionPolicy`);
+5. stops, or raises the penalty (:class:`~convexguid.scp.policies.PenaltyPolicy`) when a step shows it below the
+   multipliers or the iterates stall with constraints violated.
 
 The objective's residuals are linearized (Gauss-Newton); a program may add a convex model of its constraints'
-curvature (``curvature_model``, weighted by the last multipliers: an S :math:`\\ell_1` QP step, Fletcher 1985). A
-step the merit refuses may still be taken by a funnel on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`).
-Near a feasible point the end game (:mod:`convexguid.scp.newton`) also proposes Newton's step on the working set the
-subproblems agree on, with the exact Hessian of the Lagrangian; and once a small program's linear steps keep reaching
-the trust region there, its subproblem is the curved one (:mod:`convexguid.scp.curved`): that Hessian made convex on
-the working rows, with which the QP's own solver picks the active set.
-
-Statuses: ``converged`` only at a feasible KKT point (:mod:`convexguid.scp.kkt`, relative to the objective within
-``kkt_tolerance``) with no direction of negative curvature worth following (a saddle is stepped off, twice at most:
-:mod:`convexguid.scp.optimality`); ``unverified`` when the steps become small at a feasible point whose KKT
-residuals stay above tolerance after :data:`POLISH_ITERATIONS` more stalls of polishing (the message names them);
-``infeasible`` only with a certificate: the hard linear constraints admit no point
-(:func:`~convexguid.scp.restoration.restore_start`'s elastic LP), or the elastic phase-1 run
-(:func:`~convexguid.scp.restoration.run_phase1`), started when the iterates stall infeasible at the largest penalty,
-itself stalls with the violation positive; ``max_iterations``; and ``solver_error`` when the backend fails more
-often in a row than ``max_backend_failures``.
+curvature (``curvature_model``, weighted by the last multipliers: an S :math:`\\ell_1` QP step, Fletcher 1985). Near a
+feasible point the end game adds Newton's step (:mod:`convexguid.scp.newton`) and the curved subproblem
+(:mod:`convexguid.scp.curved`). Statuses: ``converged`` only at a feasible KKT point (:mod:`convexguid.scp.optimality`);
+``unverified`` when its KKT residuals stay above tolerance after :data:`POLISH_ITERATIONS` more stalls; ``infeasible``
+only with a certificate (:mod:`convexguid.scp.restoration`); ``max_iterations``; ``solver_error`` after more than
+``max_backend_failures`` backend failures in a row. Each mechanism, measured: docs/engine.md.
 """
 
 from __future__ import annotations
@@ -78,39 +61,26 @@ __all__ = ["IterationRecord", "SCPAlgorithm", "SCPResult", "merge_results", "sol
 Log = Callable[[IterationRecord], None]
 
 NEARLY_FEASIBLE = 100.0
-"""A first stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once.
-
-So small a violation may be at the accuracy of the subproblem's solution; raising the penalty then
-only makes the merit function noisier, while minimising the violation alone removes it in a few
-steps. A later stall raises the penalty as usual.
-"""
-
+"""A first stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once (it may
+be the subproblem's round-off: docs/engine.md, 'Restoration and phase 1'); a later stall raises the penalty."""
 
 RESTORED = 0.01
 """Phase 1 ends once the violation is within this share of the feasibility tolerance: it seeks a feasible point, not
-the violation's minimum (COPS' hang glider spent 140 phase-1 iterations taking it from 2e-9 to 1e-12)."""
+the violation's minimum (measured: docs/engine.md, 'Restoration and phase 1')."""
 
 PINNED = 0.9
 """A linear subproblem's step of at least this share of the trust radius reached it (see ``IterationState.pinned``)."""
 
 POLISH_ITERATIONS = 40
-"""A feasible stall whose KKT residuals are above tolerance goes on polishing (the curved subproblem of
-:mod:`convexguid.scp.curved`, Newton's steps) until it has stalled this many times more; then it is reported
-``unverified`` with the residuals named. Measured on the random minimum-time slew that needed it most (robustness
-benchmark, slew #4): 14 more iterations to the KKT tolerance, 5e-6 below where the linear model had stopped. The
-random rendezvous #75 lies in a long flat valley: Newton's steps take its fuel down by about 1e-8 of it each, and
-every curved step between them is a stall. At 20 it ended ``unverified`` (stationarity 4e-6) after 128 iterations,
-or converged after 87 (7.6e-7) where the last bits of its Hessian differed; at 40 it converges after 174, 3e-7
-lower (measured before the penalty stopped following the curved step's multipliers; the family's largest count is
-108 since)."""
+"""More stalls a feasible point short of the KKT tolerance may polish through (the curved subproblem, Newton's
+steps) before it is reported ``unverified``; at 20 a run along a long flat valley ended ``unverified``
+(docs/engine.md, 'KKT certificates and the polish')."""
 
 
 class SCPAlgorithm:
-    """The SCP loop on one program: ``state = initialize(x0)``, then ``step(state)`` until finished.
-
-    ``phase1`` marks the elastic phase-1 run (objective dropped): a stall with constraints
-    violated then ends ``infeasible`` (the certificate) instead of raising the penalty.
-    """
+    """The SCP loop on one program: ``state = initialize(x0)``, then ``step(state)`` until finished. ``phase1``
+    marks the elastic phase-1 run (objective dropped): a stall with constraints violated then ends ``infeasible``
+    (the certificate) instead of raising the penalty."""
 
     def __init__(self, program: NonconvexProgram, settings: SCPSettings, log: Log | None = None,
                  phase1: bool = False) -> None:
@@ -137,7 +107,6 @@ class SCPAlgorithm:
         self.backend: Backend | None = None
         self.objective_at_start = self.objective_size = 0.0
 
-    # --- evaluation -------------------------------------------------------------------------
     def _evaluate(self, state: IterationState | None, x: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
         """The program's own evaluation, and one that also lists the output constraints' values and the cones'
         violations (what the merit function and the reports count)."""
@@ -155,13 +124,10 @@ class SCPAlgorithm:
     def merit(self, ev: Evaluation, x: np.ndarray, rho: float) -> float:
         return self.objective(ev, x) + rho * penalty_sum(ev)
 
-    # --- the loop ---------------------------------------------------------------------------
     def initialize(self, x0: np.ndarray | None = None, penalty: float | None = None) -> IterationState:
-        """The state at ``x0`` (default: the program's guess) moved onto the hard linear constraints.
-
-        If no point meets them the state is finished at once as ``infeasible``, with the
-        elastic program's certificate (:func:`~convexguid.scp.restoration.restore_start`).
-        """
+        """The state at ``x0`` (default: the program's guess) moved onto the hard linear constraints; if no point
+        meets them the state is finished at once as ``infeasible``, with the elastic program's certificate
+        (:func:`~convexguid.scp.restoration.restore_start`)."""
         started = time.perf_counter()
         x = np.asarray(self.program.initial_guess() if x0 is None else x0, dtype=float)
         restored = restore_start(self.program, x)
@@ -169,8 +135,7 @@ class SCPAlgorithm:
         x = x if infeasible else restored.x
         raw, ev = self._evaluate(None, x, jacobians=True)
         self.objective_at_start = self.objective(ev, x)
-        # the unit of the penalty weights: the objective at the start, or the change of its linear part when every
-        # variable moves by its scale, whichever is larger (a terminal cost that is zero at the start has a size)
+        # the unit of the penalty weights (PenaltyPolicy): a terminal cost that is zero at the start has a size
         self.objective_size = max(abs(self.objective_at_start), float(np.abs(self.cost) @ self.scale))
         rho = self.penalty.initial(self.objective_size) if penalty is None else penalty
         state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
@@ -260,14 +225,12 @@ class SCPAlgorithm:
             hessian = self._curvature_values(state)
         result, model = self._solve_subproblem(state, state.raw, hessian, curved)
         if curved is not None and (not result.usable or not state.merit - model > 0):
-            # the curved QP failed or sees no decrease: the linear subproblem instead (an inaccurate answer is a
-            # step like any other; refused, robustness's rendezvous #75 polished on linear steps to `unverified`)
+            # the curved QP failed or sees no decrease: the linear subproblem (docs/engine.md, 'Curved subproblem')
             curved = None
             result, model = self._solve_subproblem(state, state.raw, hessian)
         assembler = self.curved.assembler if curved is not None else self.assembler
         if not result.usable:
-            # Numerical trouble (the start meets the hard constraints, so d = 0 is always feasible):
-            # retry a smaller, better-conditioned subproblem.
+            # numerical trouble (d = 0 is feasible: the start meets the hard constraints): retry a smaller subproblem
             state.failures += 1
             state.radius = self.trust_region.after_failure(state.radius)
             self.record(state, 0.0, float("nan"), False, result)
@@ -384,11 +347,8 @@ class SCPAlgorithm:
         return values
 
     def _relax_penalty(self, state: IterationState) -> None:
-        """Near a feasible point, let the penalty weight follow the multipliers
-        (:meth:`~convexguid.scp.policies.PenaltyPolicy.relaxed`, where the measurement is); not on the curved
-        subproblem's multipliers, which understate it (measured on a minimum-fuel rendezvous whose fuel rate is
-        :math:`\\sqrt{|u|^2 + \\epsilon}`: a curved step's largest multiplier, 0.012, took the weight from 440 to its
-        floor of 3, and the next eight steps bought fuel with the fuel integral's own defects, to -3181)."""
+        """Near a feasible point, let the penalty weight follow the multipliers, but not a curved subproblem's, which
+        understate it (:meth:`~convexguid.scp.policies.PenaltyPolicy.relaxed`; docs/engine.md, 'Penalty weight')."""
         if (self.phase1 or state.multipliers is None or state.augmented
                 or max_violation(state.ev) > self.settings.second_order_violation):
             return
@@ -399,8 +359,7 @@ class SCPAlgorithm:
 
     def _small(self, state: IterationState, step: float, predicted: float) -> bool:
         """The step, or the decrease the model predicted for it, is below the tolerance (or the radius collapsed)."""
-        # the main loop measures decrease against max(1, |merit|); phase 1's merit is the violation itself,
-        # so a decrease is small only relative to what is left to remove
+        # phase 1's merit is the violation itself: a decrease is small only relative to what is left to remove
         unit = abs(state.merit) if self.phase1 else max(1.0, abs(state.merit))
         small_decrease = 0 <= predicted <= self.settings.tolerance * unit
         return step <= self.settings.tolerance or small_decrease or self.trust_region.collapsed(state.radius)
@@ -421,8 +380,7 @@ class SCPAlgorithm:
     def _take_newton(self, state: IterationState, newton: Candidate, result: BackendResult) -> None:
         """Move to Newton's trial point (its penalty weight and working-set multipliers come along)."""
         if newton.ratio >= self.trust_region.expand:
-            # a whole step the model predicted well frees Newton's radius; a cut one doubles it (Alg. 4.1 of
-            # Nocedal & Wright): freed at once, the next full step overshoots where the model no longer holds
+            # a whole well-predicted step frees Newton's radius, a cut one doubles it (Nocedal & Wright, Alg. 4.1)
             state.newton_radius = np.inf if newton.whole else 2.0 * state.newton_radius
         self.move_to(state, newton.x, newton.penalty)
         state.funnel = newton.funnel
@@ -438,12 +396,9 @@ class SCPAlgorithm:
             self._stalled(state)
 
     def _stalled(self, state: IterationState) -> None:
-        """The iterates stopped moving: converged if feasible and a KKT point, else raise the penalty or certify.
-
-        A small step is not yet proof of optimality (a trust region that collapsed also takes small steps): a
-        feasible stall whose KKT residuals stay above the tolerance after :data:`POLISH_ITERATIONS` more
-        iterations ends ``unverified``, the residuals named.
-        """
+        """The iterates stopped moving: converged if feasible and a KKT point, else raise the penalty or certify. A
+        small step is no proof of optimality: a feasible stall short of the KKT tolerance polishes on, and ends
+        ``unverified`` after :data:`POLISH_ITERATIONS` more stalls."""
         s = self.settings
         if max_violation(state.ev) <= s.feasibility_tolerance:
             why = ("trust region collapsed: no decrease found near a feasible point"
@@ -473,13 +428,11 @@ class SCPAlgorithm:
             state.finish("infeasible", "the elastic phase-1 problem stalls with the constraints still violated: "
                          + describe_violations(state.ev))
             return
-        # Just above the tolerance, round-off in the subproblem may be the cause: restore feasibility once.
-        # If the iterates drift back to an infeasible stall, the penalty is below the multipliers after all.
+        # just above the tolerance the subproblem's round-off may be the cause: restore feasibility once first
         nearly_feasible = max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance
         first_try = nearly_feasible and state.phase1_runs == 0
         if not first_try and self._raise_penalty(state):
-            # A stationary point of the penalty function that violates the constraints:
-            # the penalty is below the multipliers; raise it and go on.
+            # an infeasible stationary point of the penalty function: the penalty is below the multipliers
             return
         # at the largest penalty, or stalled by round-off just above the tolerance: restore feasibility directly
         run_phase1(self, state)

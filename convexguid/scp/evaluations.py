@@ -1,8 +1,7 @@
 """The program's evaluations as the engine asks for them: a trial point's maps are not computed twice.
 
-Each iteration evaluates its trial points without Jacobians (the merit needs values only), then the one it accepts
-with them. A program that offers ``with_jacobians(x, values)`` (see :class:`~convexguid.scp.problem.NonconvexProgram`)
-then only adds the Jacobians to the evaluation it already made there.
+Each iteration evaluates its trial points without Jacobians, then the one it accepts with them; a program that offers
+``with_jacobians(x, values)`` (:class:`~convexguid.scp.problem.NonconvexProgram`) then only adds the Jacobians.
 """
 
 from __future__ import annotations
@@ -18,8 +17,7 @@ and a second-order correction of each)."""
 
 class ProgramEvaluations:
     """``program.evaluate(x, jacobians)``, keeping the evaluations without Jacobians made since the last one with
-    them; at one of those points (the same array, its values unchanged) a program with ``with_jacobians`` only adds
-    them. The same numbers either way."""
+    them; at one of those points (the same array, unchanged) ``with_jacobians`` only adds them (the same numbers)."""
 
     def __init__(self, program: NonconvexProgram) -> None:
         self.program = program

@@ -6,19 +6,17 @@ the Karush-Kuhn-Tucker conditions of
     \\min_x f(x) = r^T W r + c^T x \\quad\\text{s.t.}\\quad Ax = b,\\; Gx \\le h,\\; M r(x) \\le m,\\;
     g(x) \\le 0,\\; e(x) = 0,\\; F_i x + f_i \\in \\mathcal Q_i
 
-at the iterate, with the multipliers of the last subproblem (Nocedal & Wright, *Numerical
-Optimization*, 2nd ed., Thm. 12.1, eqs. 12.34):
+at the iterate, with the multipliers of the last subproblem (Nocedal & Wright, *Numerical Optimization*, 2nd ed.,
+Thm. 12.1, eqs. 12.34):
 
 * stationarity: :math:`\\nabla f + A^T\\lambda_A + G^T\\mu_G + J_r^T M^T \\nu + J_g^T \\mu + J_e^T \\lambda
-  - \\sum_i F_i^T y_i = 0` (:math:`y_i \\in \\mathcal Q_i`, the cones' duals),
-  measured per variable scale :math:`\\sigma_i` (what the objective would change if the variable moved
-  by its own typical size), in the objective's units;
+  - \\sum_i F_i^T y_i = 0` (:math:`y_i \\in \\mathcal Q_i`, the cones' duals), each component times its variable's
+  scale :math:`\\sigma_i`, in the objective's units;
 * feasibility: the worst violation of any constraint, in that constraint's own unit;
 * complementarity: :math:`\\max_j |\\mu_j g_j(x)|` over every inequality and :math:`|y_i^T (F_i x + f_i)|` over
   every cone, in the objective's units.
 
-Stationarity and complementarity are judged relative to :math:`\\max(|f(x)|, 10^{-3}|f(x_0)|)`: a
-minimum time is measured in seconds, an energy in its own units, whatever their size.
+Stationarity and complementarity are judged relative to :math:`\\max(|f(x)|, 10^{-3}|f(x_0)|)`.
 """
 
 from __future__ import annotations

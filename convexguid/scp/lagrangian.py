@@ -1,18 +1,15 @@
 """The Lagrangian of the nonlinear program: its multipliers, its gradient, and the working set they define.
 
-With the multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem (:class:`Multipliers`, read off its
-dual) the Lagrangian's Hessian is
+With the multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem (:class:`Multipliers`) its Hessian is
 
 .. math::
 
     \\nabla^2_{xx} L = 2 J_r^T W J_r + \\sum_i \\omega_i \\nabla^2 r_i + \\sum_j \\mu_j \\nabla^2 g_j
     + \\sum_k \\lambda_k \\nabla^2 e_k ,
 
-where :math:`\\omega = 2 W r + M^T \\nu` collects the objective's and the output constraints' weight on the
-residuals (:class:`CurvatureWeights`). The first term is the Gauss-Newton part every subproblem already has; the
-rest comes from the program (``lagrangian_hessian(x, weights)``, exact: CasADi's for every ``convexguid.ocp``
-problem, the families' own), and a program without one gets no end game: no Hessian is differenced in the loop.
-The end game (:mod:`convexguid.scp.endgame`, :mod:`convexguid.scp.curved`) takes it on the :class:`WorkingSet`.
+where :math:`\\omega = 2 W r + M^T \\nu` (:class:`CurvatureWeights`). Every subproblem has the Gauss-Newton part; the
+rest comes from the program (``lagrangian_hessian(x, weights)``, exact), and a program without one gets no end game
+(:mod:`convexguid.scp.endgame`, :mod:`convexguid.scp.curved`): no Hessian is differenced in the loop.
 """
 
 from __future__ import annotations
@@ -28,17 +25,12 @@ MAX_DENSE_SIZE = 3000
 """Programs with more variables keep the first-order model (the end game works on dense matrices)."""
 
 
-
 @dataclass(frozen=True)
 class Multipliers:
-    """Multipliers of the nonlinear program, read off a subproblem's dual.
-
-    ``equality`` (:math:`\\lambda`, free) and ``inequality`` (:math:`\\mu \\ge 0`) belong to the
-    program's own nonlinear blocks in their order; ``output`` (:math:`\\nu \\ge 0`) to the output
-    constraints :math:`M r \\le m`; ``linear_equality`` and ``linear_inequality`` to :math:`Ax = b` and
-    :math:`Gx \\le h`; ``cone`` (each in its second-order cone) to the program's cones, row by row. Each is in
-    the objective's units per unit of its constraint.
-    """
+    """Multipliers of the nonlinear program, read off a subproblem's dual, in the objective's units per unit of their
+    constraint: ``equality`` (:math:`\\lambda`, free) and ``inequality`` (:math:`\\mu \\ge 0`) of the program's own
+    nonlinear blocks in their order; ``output`` (:math:`\\nu \\ge 0`) of :math:`M r \\le m`; ``linear_equality`` and
+    ``linear_inequality`` of :math:`Ax = b` and :math:`Gx \\le h`; ``cone`` (each in its cone) row by row."""
 
     equality: np.ndarray
     inequality: np.ndarray
@@ -112,15 +104,11 @@ def has_jacobian(ev: Evaluation) -> bool:
 
 @dataclass(frozen=True)
 class WorkingSet:
-    """The constraints taken as active: which rows of each kind, so their values can be read at any point.
-
-    The hard equalities ``A x = b`` are always in it. A nonlinear equality ``e`` is, unless its multiplier
-    reached the penalty weight: the subproblem then paid to leave it unmet (its linearization conflicts with
-    the others), and Newton's step must not insist on it either. An inequality (hard ``G x <= h``, output
-    ``M r <= m``, nonlinear ``g``) is in it when its multiplier is significant (and below the penalty
-    weight, for the softened ones) or its value is within the tolerance of its bound. Rows come in the
-    order: ``A``, ``G``, outputs, ``g`` blocks, ``e`` blocks.
-    """
+    """The constraints taken as active, row by row in the order ``A``, ``G``, outputs, ``g`` blocks, ``e`` blocks: the
+    hard equalities ``A x = b`` always; a nonlinear equality unless its multiplier reached the penalty weight (the
+    subproblem paid to leave it unmet); an inequality (hard ``G x <= h``, output ``M r <= m``, nonlinear ``g``) when its
+    multiplier is significant (and below the penalty weight, if softened) or its value is within the tolerance of its
+    bound. Its rows' values and Jacobian can then be read at any point."""
 
     linear_inequality: np.ndarray
     output: np.ndarray

@@ -1,34 +1,16 @@
 """Newton's candidate step for one SCP iteration: the end game of :mod:`convexguid.scp.endgame`, made safe.
 
-Every iteration solves the convex subproblem first. Once the iterate is within
-``second_order_violation`` of feasibility, :func:`newton_candidate` also proposes the
-equality-constrained quadratic step on that subproblem's working set:
-
-* only once two subproblems in a row agree on the working set (an active set that still changes
-  would make the step, and the Hessian it costs, a waste);
-* on the hard equalities and within the hard inequalities (a bound it breaks joins the working set,
-  twice at most; when one is still broken, the working set is not settled and no step is proposed);
-* inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one,
-  freed by a good whole one), and the first-order one;
-* judged as every step is: the merit's ratio test, or else the funnel on the violation, whose objective ratio then
-  sizes the radius (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`). On COPS' hang glider Newton's steps gained
-  what their model predicted but broke the constraints by their second-order error (1e-9 to 1e-8, feasible), a loss
-  to the merit: each refused step quartered Newton's radius, 56 SCP iterations; with the funnel, 34;
-* the merit with the penalty weight at most the one that follows the multipliers
-  (:meth:`~convexguid.scp.policies.PenaltyPolicy.judging`): any weight above the multipliers makes the
-  penalty exact, and a far larger one (an escalation that has served its purpose) only magnifies the
-  curvature error of a long step (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 18.3). Not when
-  every multiplier is inactive: they then say nothing of the weight needed, and a weight brought down to its
-  floor that way left a test program crawling along a cone it broke by 0.68 for 100 iterations
-  (tests/test_ocp_cones.py, its multiplier then equal to the weight, so the penalty was not exact);
-* with a least-norm second-order correction when its ratio is poor (the Maratos effect);
-* a regularized step (the reduced Hessian indefinite, :func:`~convexguid.scp.endgame.newton_step`) by the merit
-  alone, with the iterate's own weight, and not at all when it breaks a hard bound: its multipliers measure
-  nothing, and a funnel that let it through (Betts' three-phase Goddard rocket, whose singular arc makes the
-  reduced Hessian indefinite) alternated it with first-order steps back to feasibility for 300 iterations.
-
-The engine takes it only if it is accepted and it does at least as well as the first-order step
-on the same merit: the end game can make an iteration better, never worse.
+Within ``second_order_violation`` of feasibility, :func:`newton_candidate` proposes the equality-constrained quadratic
+step on the working set of the subproblem just solved: only once two subproblems in a row agree on it; on the hard
+equalities and within the hard inequalities (a bound it breaks joins the working set, twice at most, else no step);
+inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one, freed by a good whole
+one) and the first-order one; judged by the merit's ratio test or else the funnel
+(:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`), with the weight at most the one that follows the multipliers
+(:meth:`~convexguid.scp.policies.PenaltyPolicy.judging`; Nocedal & Wright, *Numerical Optimization*, 2nd ed.,
+Sec. 18.3); with a least-norm second-order correction when its ratio is poor (the Maratos effect). A regularized step
+(the reduced Hessian indefinite) is judged by the merit alone with the iterate's own weight, and never taken when it
+breaks a hard bound. The engine takes the step only if it does at least as well as the first-order one: the end game
+can make an iteration better, never worse (why each rule: docs/engine.md, 'Newton end game').
 """
 
 from __future__ import annotations
@@ -79,8 +61,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     if max_violation(state.ev) > s.second_order_violation:
         return None
     if state.multipliers.cone_active():
-        # a cone holds with equality: the equality-constrained step knows no cones (the curved and first-order
-        # steps, which keep each cone exact, finish the run)
+        # a cone holds with equality: the EQP step knows no cones (the curved and first-order steps finish the run)
         return None
     working = models.working_set(state.x, state.raw, state.multipliers, s.feasibility_tolerance, state.penalty)
     settled, state.working_set = working == state.working_set, working

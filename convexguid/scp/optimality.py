@@ -1,11 +1,9 @@
 """Is the iterate a minimum? The KKT residuals, the certificate a subproblem gives its own iterate, and the check
 that a KKT point is no saddle (with the step off one that is).
 
-A small step proves nothing: a trust region that has collapsed also takes small steps. The engine
-(:class:`~convexguid.scp.engine.SCPAlgorithm`) ends a run ``converged`` only through :func:`finish_optimal`, at an
-iterate whose KKT residuals (:mod:`convexguid.scp.kkt`) are within tolerance, with the multipliers of the subproblem
-that led to it or of the one solved there, and whose reduced Hessian has no direction of negative curvature worth
-following; a stationary point with one is a saddle, left along that direction (:func:`escape_saddle`).
+A small step proves nothing (a collapsed trust region also takes small steps): a run ends ``converged`` only through
+:func:`finish_optimal`, at an iterate whose KKT residuals (:mod:`convexguid.scp.kkt`) hold with the multipliers of a
+subproblem or of a least-squares estimate and whose reduced Hessian has no negative curvature worth following.
 """
 
 from __future__ import annotations
@@ -49,19 +47,10 @@ def kkt_met(algo: SCPAlgorithm, state: IterationState) -> bool:
 
 
 def certified_here(algo: SCPAlgorithm, state: IterationState, result: BackendResult, predicted: float) -> bool:
-    """Whether the subproblem just solved at the iterate proves it a KKT point (then the run ends there).
-
-    The subproblem's multipliers satisfy its own optimality conditions at its step :math:`d`; for the nonlinear
-    program at the iterate they leave a stationarity residual of the order of the model's curvature times :math:`d`
-    (and the trust region's multipliers, when it binds). They certify the iterate when they meet the KKT tolerance
-    and the decrease the subproblem still ``predicted`` is within the same tolerance of the objective: the largest
-    stationarity residual alone is a per-variable figure, and over hundreds of variables a step it allows may still
-    gain more than that (measured on the CW docking example: residuals within 1e-6 at a fuel 1.5e-6 above the
-    optimum the next step reached). Without this certificate, the last step of a converged run, a few 1e-7 long, is
-    judged by a ratio of two round-off-sized decreases and may be refused, collapsing the trust region one
-    measurement short of the KKT tolerance (measured: the multi-cone minimum-time and minimum-energy files,
-    stationarity 1.3e-6 and 2.3e-6 against 1e-6).
-    """
+    """Whether the subproblem just solved at the iterate proves it a KKT point (then the run ends there): its
+    multipliers meet the KKT tolerance and the decrease it still ``predicted`` is within the same tolerance of the
+    objective. Without this certificate the last step of a converged run may be refused on a ratio of round-off-sized
+    decreases (measured: docs/engine.md, 'KKT certificates and the polish')."""
     measure_kkt(algo, state)
     if not kkt_met(algo, state) or predicted > algo.settings.kkt_tolerance * state.kkt.objective_unit:
         return False
@@ -71,20 +60,13 @@ def certified_here(algo: SCPAlgorithm, state: IterationState, result: BackendRes
 
 
 def finish_optimal(algo: SCPAlgorithm, state: IterationState) -> None:
-    """A KKT point: converged, unless the reduced Hessian has negative curvature (then step off the saddle).
-
-    The message is "KKT conditions met" whichever multipliers proved it and whatever stopped the iterates (the
-    report prints it, and the route there may differ between machines; the iteration history keeps it), followed
-    by any steps off saddles.
-
-    Negative curvature counts when a step of the initial trust radius along it would gain more than the KKT
-    tolerance of the objective, :math:`\\tfrac12 |\\lambda_{min}| \\Delta_0^2 > \\epsilon\\, |f|`: a nearly inactive
-    concave constraint with a multiplier of round-off size (the powered descent's throttle floor, eigenvalue
-    -1.1e-8) is no saddle worth leaving, and stepping off it only moved the plan.
-    """
+    """A KKT point: converged ("KKT conditions met", then any steps off saddles), unless the reduced Hessian has
+    negative curvature worth following, :math:`\\tfrac12 |\\lambda_{min}| \\Delta_0^2 > \\epsilon\\, |f|` for the
+    initial trust radius :math:`\\Delta_0` and the KKT tolerance :math:`\\epsilon` (then step off the saddle; why:
+    docs/engine.md, 'KKT certificates and the polish')."""
     models = algo.second_order
     # with a cone active the working set leaves out a constraint that holds: its negative curvature may point out
-    # of the cone, no proof of a saddle (measured: OpenSCvx's 6-DoF descent stepped off its optimum twice)
+    # of the cone, no proof of a saddle (measured: docs/engine.md, 'KKT certificates and the polish')
     if (models is not None and not algo.phase1 and state.escapes < MAX_ESCAPES and state.multipliers is not None
             and not state.multipliers.cone_active()):
         working = models.working_set(state.x, state.raw, state.multipliers, algo.settings.feasibility_tolerance,
@@ -110,18 +92,12 @@ ESCAPE_SHARE = 0.1
 def escape_saddle(algo: SCPAlgorithm, state: IterationState, model: LocalModel, direction: np.ndarray,
                   curvature: float, unit: float) -> bool:
     """Step off a saddle along its direction of negative curvature (scaled ``direction``, reduced-Hessian eigenvalue
-    ``curvature``) and go on; False (and no step) where the merit function drops neither way.
-
-    Each trial point is brought back onto the working set to first order (the least-norm correction of
-    :meth:`~convexguid.scp.endgame.LocalModel.correction`: the straight line leaves the curved constraints by its
-    second-order error) and tried both ways from the initial trust radius :math:`r` down, halved while the decrease
-    the curvature promises, :math:`\\tfrac12 |\\lambda| r^2`, is above the KKT tolerance of the objective (``unit``:
-    a saddle left by less is none worth leaving). The run goes on from the first point whose merit is lower by
-    :data:`ESCAPE_SHARE` of that promise, with the initial radius. Stepping off without a lower merit only moved
-    the plan: Dymos' single stage to orbit left its optimum twice so, each time to come back to it in 6 iterations,
-    its merit higher along the direction by 2 to 20 times its objective whichever way (and so again on each
-    repaired grid).
-    """
+    ``curvature``) and go on; False (and no step) where the merit function drops neither way. Each trial point, brought
+    back onto the working set to first order (:meth:`~convexguid.scp.endgame.LocalModel.correction`), is tried both
+    ways from the initial trust radius :math:`r` down, halved while the promised decrease
+    :math:`\\tfrac12 |\\lambda| r^2` is above the KKT tolerance of the objective (``unit``); the run goes on from the
+    first point whose merit is lower by :data:`ESCAPE_SHARE` of that promise (docs/engine.md, 'KKT certificates and
+    the polish')."""
     models = algo.second_order
     radius = algo.trust_region.initial
     while (promised := 0.5 * -curvature * radius**2) > algo.settings.kkt_tolerance * unit:
@@ -142,30 +118,21 @@ def escape_saddle(algo: SCPAlgorithm, state: IterationState, model: LocalModel, 
 
 
 DENSE_LEAST_SQUARES = 1_000_000
-"""Largest least-squares matrix (entries) :func:`least_squares_multipliers` solves densely by BVLS (an exact active
-set, one dense least-squares solve a step); a larger one is the sparse QP of :func:`_sparse_bounded_least_squares`.
-Measured on the free-flying robot at 100 intervals (1511 variables, 3867 rows near active): BVLS took 131 steps
-of 2.3 s, 304 s of a 318 s solve; SciPy's sparse trust-region reflective method stopped at its iteration limit
-after 16 s, unconverged."""
+"""Largest least-squares matrix (entries) :func:`least_squares_multipliers` solves densely by BVLS, which took most
+of a 1511-variable solve; a larger one is the sparse QP of :func:`_sparse_bounded_least_squares` (docs/engine.md)."""
 
 NEAR_ACTIVE = 1e-6
 """An inequality this close to its bound (in its own unit) may carry a multiplier in the least-squares estimate."""
 
 
 def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Multipliers | None:
-    """The multipliers that best satisfy stationarity at the iterate: nonnegative on the inequalities within
-    :data:`NEAR_ACTIVE` of their bounds, free on the equalities, zero elsewhere; a second-order cone within
-    :data:`NEAR_ACTIVE` of its boundary (not at its apex) is the inequality :math:`\\|v_{1:}\\| - v_0 \\le 0` there,
-    whose multiplier :math:`\\mu` is the cone dual :math:`\\mu (1, -v_{1:}/\\|v_{1:}\\|)` (:func:`_cone_rows`).
-
-    The KKT conditions ask that *some* multipliers exist. Where the active constraints are degenerate (a rate box
-    held over several nodes, whose rows the defects nearly imply) the multipliers are not unique, and those of the
-    last subproblem or of Newton's working set can miss by far more than the iterate does: a converged multi-cone
-    plan, its objective steady to ten digits, measured a stationarity of 2.7e-5 with them. This estimate,
-    :math:`\\min \\|S(\\nabla f + A_W^T y)\\|_2` with :math:`y \\ge 0` on the inequalities (a bounded least-squares
-    problem: SciPy's BVLS, or Clarabel on a large one, :data:`DENSE_LEAST_SQUARES`), is the best those constraints
-    can do.
-    """
+    """The multipliers that best satisfy stationarity at the iterate, :math:`\\min \\|S(\\nabla f + A_W^T y)\\|_2`
+    (bounded least squares: SciPy's BVLS, or Clarabel on a large one, :data:`DENSE_LEAST_SQUARES`): nonnegative on the
+    inequalities within :data:`NEAR_ACTIVE` of their bounds, free on the equalities, zero elsewhere; a second-order
+    cone within :data:`NEAR_ACTIVE` of its boundary (not at its apex) is the inequality
+    :math:`\\|v_{1:}\\| - v_0 \\le 0` there, whose multiplier :math:`\\mu` is the cone dual
+    :math:`\\mu (1, -v_{1:}/\\|v_{1:}\\|)` (:func:`_cone_rows`). Where the active constraints are degenerate the
+    subproblem's own multipliers can miss by far more (docs/engine.md, 'KKT certificates and the polish')."""
     raw = state.raw
     linear = algo.linear
     outputs = algo.outputs

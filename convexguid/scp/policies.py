@@ -1,9 +1,7 @@
 """The named rules of the SCP step: trust region, penalty weight, funnel, second-order correction.
 
-Each policy is a small object built from :class:`~convexguid.scp.problem.SCPSettings`; the
-engine asks it one question at a time (how far may the next step go, how heavy is the
-penalty, is a correction worth a second solve), so a rule can
-be read, tested and replaced on its own.
+Each policy is a small object built from :class:`~convexguid.scp.problem.SCPSettings` that the engine asks one question
+at a time, so a rule can be read, tested and replaced on its own (what each is for, measured: docs/engine.md).
 """
 
 from __future__ import annotations
@@ -28,12 +26,9 @@ def _short_of(radius: float, room: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class TrustRegionPolicy:
-    """Box trust region in scaled variables with the classical ratio test.
-
-    The radius shrinks to a quarter of the step on poor agreement (ratio below ``shrink``)
-    and doubles when the model is trusted (ratio above ``expand``) and the step reached the
-    boundary (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 4.1).
-    """
+    """Box trust region in scaled variables with the classical ratio test: the radius shrinks to a quarter of the step
+    on poor agreement (ratio below ``shrink``) and doubles when the model is trusted (ratio above ``expand``) and the
+    step reached the boundary (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 4.1)."""
 
     initial: float
     minimum: float
@@ -47,15 +42,10 @@ class TrustRegionPolicy:
 
     def box(self, radius: float, x: np.ndarray, scale: np.ndarray,
             guarded: tuple[np.ndarray, np.ndarray] | None) -> float | np.ndarray:
-        """The limits of the scaled step, upper then lower: the radius, and for each variable with a guarded bound at
-        most :data:`FRACTION_TO_BOUNDARY` of its distance to the bound (IPOPT's fraction-to-the-boundary rule: Wachter
-        & Biegler, Math. Program. 106, 2006, eq. 15) until it is within :data:`BOUNDARY_REACH` of it.
-
-        A guarded bound keeps the iterates inside the domain where the program's maps mean something (a mass above
-        zero, a logarithm's argument above its floor): a step that puts the variable on such a bound linearizes
-        where the next model is useless. Measured on the tumor anti-angiogenesis problem (q >= 0.01 inside
-        p' = -xi p ln(p/q)): unguarded, the first steps put q on its bound at 10, 20 and 30 intervals and the runs
-        ended `max_iterations` or `infeasible`; guarded, all converge (10 to 45 iterations)."""
+        """The limits of the scaled step, upper then lower: the radius, and for each variable with a guarded bound (one
+        beyond which the program's maps lose their meaning) at most :data:`FRACTION_TO_BOUNDARY` of its distance to
+        the bound (IPOPT's fraction-to-the-boundary rule: Wachter & Biegler, Math. Program. 106, 2006, eq. 15) until
+        it is within :data:`BOUNDARY_REACH` of it (docs/engine.md, 'Trust region and fraction to the boundary')."""
         if guarded is None:
             return radius
         lower, upper = guarded
@@ -81,24 +71,14 @@ class TrustRegionPolicy:
 
 @dataclass(frozen=True)
 class PenaltyPolicy:
-    """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty: where it starts, how it follows the multipliers, and
-    its escalation.
-
-    With ``unit = "objective"`` the configured weights are counted in units of the objective's size at the
-    start point: :math:`|f(x_0)|`, or the change :math:`|c|^T \\sigma` of its linear part when every variable moves
-    by its scale, whichever is larger (the engine passes it). A weight of 30 then means "30 times the start's
-    maneuver time per unit of constraint violation", whatever the problem's scale. With ``unit = "absolute"`` they
-    are used as given.
-
-    The penalty is exact for any weight above the largest multiplier :math:`\\|\\lambda\\|_\\infty` (Nocedal & Wright,
-    *Numerical Optimization*, 2nd ed., Thm. 17.3); a weight far above it only makes the merit function count
-    the linearization error of every step as a large loss, so the ratio test holds the trust region small.
-    Near a feasible point the weight therefore follows the multipliers the last subproblem reported: brought down
-    to :attr:`over_multipliers` times the largest whenever it is more than :attr:`slack` times that (never below
-    :attr:`floor` of the starting weight, and not when every multiplier is below :attr:`inactive` of the weight: a
-    subproblem with every constraint inactive says nothing of the weight the next one needs). When the iterates
-    stall infeasible it is multiplied by ``factor`` up to its maximum (Nocedal & Wright, Sec. 17.2).
-    """
+    """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty: its start, how it follows the multipliers, its rise.
+    With ``unit = "objective"`` the weights are counted in units of the objective's size at the start (the engine
+    passes it: :math:`|f(x_0)|`, or :math:`|c|^T \\sigma` if larger), with ``unit = "absolute"`` as given. The penalty
+    is exact for any weight above the largest multiplier :math:`\\|\\lambda\\|_\\infty` (Nocedal & Wright, *Numerical
+    Optimization*, 2nd ed., Thm. 17.3), so near a feasible point the weight follows the last multipliers
+    (:meth:`relaxed`). When the iterates stall infeasible it is multiplied by ``factor`` up to its maximum (Nocedal &
+    Wright, Sec. 17.2); it is raised at once when a step shows it too low (:meth:`steered`; docs/engine.md, 'Penalty
+    weight')."""
 
     start: float
     maximum: float
@@ -131,49 +111,30 @@ class PenaltyPolicy:
 
     def relaxed(self, rho: float, largest_multiplier: float, objective_size: float) -> float | None:
         """The weight :meth:`following` the multipliers if ``rho`` is more than :attr:`slack` times it, else None
-        (also when no constraint is active: the largest multiplier below :attr:`inactive` times ``rho``).
-
-        A weight far above the multipliers makes the merit count a step's linearization error (a violation of order
-        step squared) as the model's main loss, and the ratio test keeps the region small. Measured on Betts'
-        minimum-time slew (problems/betts_asymmetric_slew.yaml): at the starting weight, 27 times the largest
-        multiplier, the radius stayed at 0.03-0.06 for 25 iterations (35 in all); following the multipliers at 3
-        times the largest, 13 to the same time. A softened row whose violation the subproblem kept has its
-        multiplier at the weight, so a weight still needed is never lowered."""
+        (also when no constraint is active: the largest multiplier below :attr:`inactive` times ``rho``). A softened
+        row whose violation the subproblem kept has its multiplier at the weight, so a weight still needed is never
+        lowered (why, with measurements: docs/engine.md, 'Penalty weight')."""
         if largest_multiplier < self.inactive * rho:
             return None
         target = self.following(largest_multiplier, objective_size)
         return target if rho > self.slack * target else None
 
     def judging(self, rho: float, largest_multiplier: float, objective_size: float) -> float:
-        """The weight that judges Newton's step (:mod:`convexguid.scp.newton`): ``rho``, at most the one
-        :meth:`following` the multipliers, unless every multiplier is below :attr:`inactive` times ``rho`` (then they
-        say nothing of the weight needed)."""
+        """The weight that judges Newton's step: ``rho``, at most the one :meth:`following` the multipliers, unless
+        every multiplier is below :attr:`inactive` times ``rho`` (then they say nothing of the weight needed)."""
         if largest_multiplier < self.inactive * rho:
             return rho
         return min(rho, self.following(largest_multiplier, objective_size))
 
     def steered(self, violation: float, linearized: float, violation_new: float | None, inside: bool,
                 kept: int) -> tuple[bool, int]:
-        """``(raise, kept)``: whether a step shows the weight below the multipliers its constraints need, so that it
-        is raised at once (steering the penalty: Byrd, Nocedal & Waltz, "Steering exact penalty methods for
-        nonlinear programming", Optim. Methods Softw. 23, 2008) instead of at the merit's infeasible stationary
-        point; and the count of steps in a row that kept the violation (``kept`` before this one). ``violation`` is
-        the iterate's, ``linearized`` the step's linearization's, ``violation_new`` the new point's if the step was
-        accepted (else None), ``inside`` whether the trust region did not stop the step. Two signs:
-
-        * the step adds to the linearized violation (by more than :attr:`retained` of it), which the step 0 would
-          not: the subproblem bought objective with violation at the price :math:`\\rho` (a steering method's
-          first test, against the best linearized violation the region allows, never above the current one). On
-          min |z - 3|^2 in the disk |z|^2 <= 2 from a weight of 0.1 (tests/test_scp_engine.py) the iterates no longer
-          stall at that weight's infeasible stationary point first;
-        * :attr:`persistence` accepted steps in a row inside the region kept more than :attr:`retained` of the
-          violation, in their linearization and at the new point: only :math:`\\rho` stopped them. On a cart-pole
-          swing-up (minimum energy, 40 intervals) the violation sat at 9.7e-3 through 60 shrinking steps until they
-          counted as a stall (62 iterations; IPOPT 17). The new point must keep it too: the hanging chain's first
-          steps keep half their linearized violation yet remove two thirds of the real one (raised there, the run
-          went from 159 iterations to `max_iterations`). And the steps must persist: raised at the first such step,
-          a random multi-cone slew of the robustness benchmark (multi-cone energy #2) ended `unverified`.
-        """
+        """``(raise, kept)``: whether a step shows the weight below the multipliers its constraints need, so that it is
+        raised at once (steering the penalty: Byrd, Nocedal & Waltz, "Steering exact penalty methods for nonlinear
+        programming", Optim. Methods Softw. 23, 2008), and the count of steps in a row that kept the violation. Two
+        signs: the step adds more than :attr:`retained` to the iterate's ``violation`` in its ``linearized`` one (the
+        step 0 would not), or :attr:`persistence` accepted steps in a row inside the region (``inside``) kept more
+        than :attr:`retained` of it, linearized and at the new point (``violation_new``, None if refused); why,
+        measured: docs/engine.md, 'Penalty weight'."""
         keeps = (violation_new is not None and inside and linearized > self.retained * violation
                  and violation_new > self.retained * violation)
         kept = kept + 1 if keeps else 0
@@ -202,29 +163,17 @@ class Funnel:
 
 @dataclass(frozen=True)
 class FunnelPolicy:
-    """A second way to accept a step: a funnel on the violation, for the steps the exact-penalty merit refuses
-    only for their constraints' curvature (Gould & Toint, "Nonlinear programming without a penalty function or a
-    filter", Math. Program. 122, 2010).
-
-    The violation :math:`h` (the merit's :math:`\\ell_1` sum) must stay below the funnel's width :math:`\\tau`, at
-    first :attr:`start_factor` times the start's violation (at least :attr:`start_floor`). A step whose model
-    predicts an objective decrease :math:`\\Delta q` large against the violation, :math:`\\Delta q^{2.3} \\ge h^{1.1}`
-    (IPOPT's switching condition: Wachter & Biegler, Math. Program. 106, 2006, eq. 19), is an *f-step*: accepted
-    when :math:`h^+ \\le \\tau` and the objective drops by at least :attr:`sufficient` of :math:`\\Delta q`. Any
-    other is an *h-step*: accepted when :math:`h^+ \\le \\tau` and the violation drops by at least
-    :attr:`sufficient` of the decrease its linearization predicted, and the funnel then narrows to
-    :math:`\\max(\\kappa \\tau, h^+ + \\tfrac12 (h - h^+))` (:math:`\\kappa` = :attr:`narrowing`).
-
-    Why: a penalty weight :math:`\\rho` above the multipliers makes the merit count a step's second-order
-    constraint error :math:`\\rho\\,|\\tfrac12 d^T \\nabla^2 c\\, d|` as a loss larger than its gain, and the trust
-    region then shrinks on steps Newton's method would take; the next subproblem removes that error.
-
-    Two rules that are each monotone in their own measure can cycle: the merit takes a step that lowers the objective
-    and raises the violation, the funnel takes the step back. Measured on the tumor anti-angiogenesis problem from a
-    trust radius of 0.05: 280 iterations alternating between two points, the merit and the funnel taking turns. So an
-    h-step remembers the point it left, as a filter entry, and no step is accepted that is no better than such a point
-    in both the violation and the objective (by :attr:`filter_margin`).
-    """
+    """A second way to accept a step: a funnel on the violation, for the steps the exact-penalty merit refuses only
+    for their constraints' curvature (Gould & Toint, "Nonlinear programming without a penalty function or a filter",
+    Math. Program. 122, 2010). The violation :math:`h` (the merit's :math:`\\ell_1` sum) must stay below the width
+    :math:`\\tau`, at first :attr:`start_factor` times the start's violation (at least :attr:`start_floor`). A step
+    whose model predicts an objective decrease :math:`\\Delta q^{2.3} \\ge h^{1.1}` (IPOPT's switching condition:
+    Wachter & Biegler, Math. Program. 106, 2006, eq. 19) is an *f-step*: accepted when :math:`h^+ \\le \\tau` and the
+    objective drops by at least :attr:`sufficient` of :math:`\\Delta q`. Any other is an *h-step*: accepted when
+    :math:`h^+ \\le \\tau` and the violation drops by at least :attr:`sufficient` of its linearization's prediction;
+    the funnel then narrows to :math:`\\max(\\kappa \\tau, h^+ + \\tfrac12 (h - h^+))` (:math:`\\kappa` =
+    :attr:`narrowing`) and keeps the point left as a filter entry, which no later step may fail to beat in violation
+    or objective (by :attr:`filter_margin`). Why, measured: docs/engine.md, 'Funnel'."""
 
     start_factor: float = 10.0
     start_floor: float = 1.0
@@ -235,9 +184,7 @@ class FunnelPolicy:
     def initial(self, violation: float, warm: bool = False) -> Funnel:
         """The funnel at a start of violation ``violation``: :attr:`start_factor` times it, and at least
         :attr:`start_floor` from a cold start. A warm start (a repair's re-solve from the last plan) gets no floor:
-        the plan is nearly feasible and the funnel must not let it go. Measured on the tumor problem at 80
-        intervals: the chatter repair's first step took the violation from 2.6e-3 to 0.87, inside the floor, and
-        traded p(tf) from 7580 to 112 for it."""
+        the plan is nearly feasible and the funnel must not let it go (measured: docs/engine.md, 'Funnel')."""
         return Funnel(self.start_factor * violation if warm else max(self.start_factor * violation, self.start_floor))
 
     def judge(self, width: float, violation: float, violation_new: float, objective_drop: float,
@@ -273,18 +220,11 @@ class FunnelPolicy:
 
 @dataclass(frozen=True)
 class SecondOrderCorrection:
-    """Fletcher's second-order correction, tried when a step's ratio is below ``threshold``.
-
-    The linear model cannot see the curvature of the constraints, so a good step can look bad
-    (the Maratos effect). The subproblem is solved again with each constraint's constant
-    shifted to what the trial point showed, :math:`c(x + d) - \\nabla c(x)\\, d`; linearizing
-    about ``x`` then gives :math:`c(x + d) + \\nabla c(x)(d' - d)`, so the corrected step cancels
-    the curvature error to first order. The corrected step is judged against the original
-    prediction and kept if its ratio is better. Nocedal & Wright, Sec. 15.6; Fletcher,
-    *Practical Methods of Optimization*, 2nd ed., Sec. 14.4. Measured without it (``python -m convexguid.classics``):
-    Betts' shuttle, its heat-limited twin and COPS' hang glider ended ``max_iterations``, catalyst mixing and
-    Goddard's rocket ``unverified``, the robot arm took 122 iterations instead of 14.
-    """
+    """Fletcher's second-order correction, tried when a step's ratio is below ``threshold`` (the Maratos effect): the
+    subproblem is solved again with each constraint's constant shifted to what the trial point showed,
+    :math:`c(x + d) - \\nabla c(x)\\, d`, so the corrected step cancels the curvature error to first order; it is judged
+    against the original prediction and kept if its ratio is better (Nocedal & Wright, Sec. 15.6; Fletcher, *Practical
+    Methods of Optimization*, 2nd ed., Sec. 14.4; measured: docs/engine.md, 'Second-order correction')."""
 
     threshold: float
     enabled: bool = True

@@ -1,21 +1,15 @@
-"""What a formulation hands to the SCP engine.
-
-The engine solves
+"""What a formulation hands to the SCP engine, which solves
 
 .. math::
 
     \\min_x\\; \\sum_i w_i\\, r_i(x)^2 + c^T x
-    \\quad\\text{s.t.}\\quad A x = b,\\; G x \\le h,\\; g(x) \\le 0,\\; e(x) = 0,\\;
-    F_i x + f_i \\in \\mathcal{Q}_i,
+    \\quad\\text{s.t.}\\quad A x = b,\\; G x \\le h,\\; g(x) \\le 0,\\; e(x) = 0,\\; F_i x + f_i \\in \\mathcal{Q}_i,
 
-where :math:`r` (least-squares residuals, e.g. torques), :math:`g` and :math:`e` are
-nonlinear and are linearized about the current iterate each iteration, while
-:math:`A, b, G, h, c` are constant and the second-order cones :math:`\\mathcal Q_i` on affine maps
-(:class:`ConeBlock`: a thrust magnitude, an approach cone) stay exact. Bounds that are linear in the residuals
-(:class:`OutputConstraints`, e.g. :math:`|u_i| \\le u_{max}` at nodes and interpolated
-points) stay sparse: the engine lifts :math:`y = r(x)` into the subproblem and bounds
-:math:`y`, instead of copying the dense Jacobian of :math:`r` into every bound row.
-A formulation implements :class:`NonconvexProgram`.
+where :math:`r` (least-squares residuals, e.g. torques), :math:`g` and :math:`e` are nonlinear and linearized about
+each iterate, :math:`A, b, G, h, c` are constant and the second-order cones :math:`\\mathcal Q_i` on affine maps
+(:class:`ConeBlock`: a thrust magnitude, an approach cone) stay exact. Bounds linear in the residuals
+(:class:`OutputConstraints`, e.g. :math:`|u_i| \\le u_{max}` at nodes and interpolated points) stay sparse: the engine
+lifts :math:`y = r(x)` into the subproblem and bounds :math:`y`. A formulation implements :class:`NonconvexProgram`.
 """
 
 from __future__ import annotations
@@ -31,13 +25,9 @@ import scipy.sparse as sp
 
 @dataclass(frozen=True)
 class ConstraintBlock:
-    """A named group of nonlinear constraints and their Jacobian at the current iterate.
-
-    ``values <= 0`` for inequalities, ``values == 0`` for equalities; ``unit`` is the
-    unit in which ``values`` is measured (used in diagnostics). ``jacobian`` is a dense
-    array, or a ``scipy.sparse.coo_matrix`` whose ``(row, col)`` entries are the same, in the
-    same order, at every evaluation (the subproblem's sparsity pattern is fixed once).
-    """
+    """A named group of nonlinear constraints and their Jacobian at the current iterate: ``values <= 0`` for
+    inequalities, ``values == 0`` for equalities, in ``unit`` (for diagnostics). ``jacobian`` is a dense array, or a
+    ``scipy.sparse.coo_matrix`` with the same ``(row, col)`` entries, in the same order, at every evaluation."""
 
     name: str
     values: np.ndarray
@@ -47,11 +37,10 @@ class ConstraintBlock:
 
 @dataclass(frozen=True)
 class ConeBlock:
-    """Second-order cones kept exact in every subproblem: :math:`\\|v_{1:}\\| \\le v_0` for each cone's part
-    :math:`v` of ``values``, an affine map of the variables (its constant ``jacobian`` a ``scipy.sparse.coo_matrix``
-    of the same entries at every evaluation). ``sizes`` lists each cone's length, in order; ``unit`` is that of
-    :math:`v_0`. The subproblem keeps the cone itself, softened only by one penalized slack per cone on
-    :math:`v_0` (an exact penalty, so every subproblem is feasible)."""
+    """Second-order cones kept exact in every subproblem: :math:`\\|v_{1:}\\| \\le v_0` for each cone's part :math:`v`
+    of ``values``, an affine map of the variables (its constant ``jacobian`` a ``scipy.sparse.coo_matrix`` of fixed
+    pattern). ``sizes`` lists each cone's length, in order; ``unit`` is that of :math:`v_0`. Each cone is softened only
+    by one penalized slack on :math:`v_0` (an exact penalty, so every subproblem is feasible)."""
 
     name: str
     values: np.ndarray
@@ -67,8 +56,7 @@ class ConeBlock:
                          for end, size in zip(ends, self.sizes, strict=True)])
 
     def as_inequality(self) -> ConstraintBlock:
-        """The cones' violations as an inequality block (no Jacobian): what the merit function and the reports
-        count."""
+        """The cones' violations as an inequality block (no Jacobian): what the merit and the reports count."""
         return ConstraintBlock(self.name, self.violations(), None, self.unit)
 
 
@@ -97,11 +85,8 @@ class LinearConstraints:
         return cls(np.zeros((0, n)), np.zeros(0), np.zeros((0, n)), np.zeros(0))
 
     def sparse(self) -> LinearConstraints:
-        """The same constraints with ``A`` and ``G`` as COO matrices of their nonzeros only.
-
-        The subproblem assemblers fix their sparsity pattern from these matrices; a dense boundary-condition
-        block would otherwise put every explicit zero into the solver's KKT system.
-        """
+        """The same constraints with ``A`` and ``G`` as COO matrices of their nonzeros only (the assemblers fix their
+        pattern from them: a dense block would put every explicit zero into the solver's KKT system)."""
         return replace(self, A=_nonzeros(self.A), G=_nonzeros(self.G))
 
     def onto_equalities(self, x: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -143,8 +128,7 @@ class OutputConstraints:
     @cached_property
     def transposed(self) -> sp.csr_matrix:
         """:math:`M^T` as CSR, made once: the multipliers' weight on the residuals, :math:`M^T \\nu`, is asked for at
-        every iteration, and a transposed view of ``M`` made each time cost more than the product (the same sums,
-        in the same order)."""
+        every iteration, and a transposed view made each time cost more than the product."""
         return sp.csr_matrix(self.M.T)
 
     def blocks_at(self, residuals: np.ndarray) -> tuple[ConstraintBlock, ...]:
@@ -156,12 +140,9 @@ class OutputConstraints:
 @dataclass(frozen=True)
 class CurvatureModel:
     """A positive semidefinite model :math:`\\bar H \\succeq 0` of the Lagrangian's curvature that every subproblem
-    carries (the Gauss-Newton part of the residuals excluded: the subproblem has it already).
-
-    ``rows`` and ``cols`` list the upper triangle of its pattern (``rows <= cols``), fixed for the run;
-    ``values(x, weights)`` gives its entries there at ``x`` for
-    :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights`` (the last subproblem's multipliers).
-    """
+    carries (the Gauss-Newton part of the residuals excluded: the subproblem has it already). ``rows`` and ``cols``
+    list the upper triangle of its pattern (``rows <= cols``), fixed for the run; ``values(x, weights)`` gives its
+    entries there for :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights`` (the last multipliers)."""
 
     rows: np.ndarray
     cols: np.ndarray
@@ -178,22 +159,15 @@ class ProgramSize:
 
 
 class NonconvexProgram(Protocol):
-    """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`.
-
-    Optional: ``curvature_model() -> CurvatureModel``, a convex model of the Lagrangian's curvature that every
-    subproblem then carries once the first has given multipliers. ``lagrangian_hessian(x, weights) -> matrix``,
-    the exact
+    """Interface between a formulation and :func:`convexguid.scp.engine.solve_scp`. Optional:
+    ``curvature_model() -> CurvatureModel``, a convex model of the Lagrangian's curvature that every subproblem carries
+    once the first has given multipliers. ``lagrangian_hessian(x, weights) -> matrix``, the exact
     :math:`\\sum \\omega_i \\nabla^2 r_i + \\sum \\mu_j \\nabla^2 g_j + \\sum \\lambda_k \\nabla^2 e_k` for
-    :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``: the end game's (:mod:`convexguid.scp.newton`,
-    :mod:`convexguid.scp.curved`); without it there is none.
-    ``A`` and ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``. ``affine``: True when every
-    nonlinear map is in fact affine (the subproblem is then the program itself: the first step takes the widest
-    trust region, and the problem is solved by one convex program and confirmed by the next).
-    ``guarded_bounds() -> (lower, upper)``: bounds of variables whose maps lose their meaning beyond them; the steps
-    keep short of them until nearly met (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`).
-    ``with_jacobians(x, values) -> Evaluation``: ``values`` (``evaluate(x, jacobians=False)``) with the Jacobians at
-    ``x`` added, the same as ``evaluate(x)``: the engine then does not compute the maps twice at a trial point it
-    accepts.
+    :class:`~convexguid.scp.lagrangian.CurvatureWeights` ``weights``, without which there is no end game. ``A`` and
+    ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``. ``affine``: every nonlinear map is in fact
+    affine (the first step takes the widest trust region). ``guarded_bounds() -> (lower, upper)``: bounds beyond which
+    the maps lose their meaning (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`). ``with_jacobians(x, values)``:
+    ``evaluate(x)`` made from ``values = evaluate(x, jacobians=False)`` (:mod:`convexguid.scp.evaluations`).
     """
 
     num_variables: int
@@ -217,21 +191,15 @@ class NonconvexProgram(Protocol):
 
 @dataclass
 class SCPSettings:
-    """Settings of the SCP loop (see :func:`convexguid.scp.engine.solve_scp`).
-
-    ``tolerance`` bounds the scaled step and the relative predicted decrease at
-    convergence; ``feasibility_tolerance`` bounds the worst nonlinear-constraint
-    violation (in each block's own unit). ``penalty`` and ``penalty_max`` are counted in
-    ``penalty_unit``: ``"absolute"``, or ``"objective"`` (units of the objective at the start
-    point, see :class:`~convexguid.scp.policies.PenaltyPolicy`). ``max_backend_failures``
-    numerical failures of the convex solver in a row are retried with a smaller trust region.
-    ``iterative_refinement`` refines the interior-point backend's KKT solves (Clarabel's default);
-    a family turns it off where that is measured to change only the time. ``second_order`` puts the
-    Lagrangian's curvature into the subproblem (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance``
-    bounds the relative stationarity and complementarity at convergence (:mod:`convexguid.scp.kkt`). ``funnel``
-    lets a funnel on the violation take steps the merit's ratio test refuses
-    (:class:`~convexguid.scp.policies.FunnelPolicy`).
-    """
+    """Settings of the SCP loop (see :func:`convexguid.scp.engine.solve_scp`). ``tolerance`` bounds the scaled step
+    and the relative predicted decrease at convergence; ``feasibility_tolerance`` the worst nonlinear-constraint
+    violation (in each block's own unit). ``penalty`` and ``penalty_max`` are counted in ``penalty_unit``,
+    ``"absolute"`` or ``"objective"`` (:class:`~convexguid.scp.policies.PenaltyPolicy`). ``max_backend_failures``
+    numerical failures of the convex solver in a row are retried with a smaller trust region. ``iterative_refinement``
+    refines the interior-point backend's KKT solves (Clarabel's default). ``second_order`` enables the end game
+    (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance`` bounds the relative stationarity and complementarity at
+    convergence (:mod:`convexguid.scp.kkt`); ``funnel`` lets a funnel take steps the merit refuses
+    (:class:`~convexguid.scp.policies.FunnelPolicy`)."""
 
     backend: str = "auto"
     max_iterations: int = 50

@@ -1,16 +1,10 @@
 """Start points the SCP can step from, and certificates when there are none.
 
-Every subproblem keeps the program's linear constraints ``A x = b, G x <= h`` hard, so a start
-point that breaks them by more than the trust radius would give a first subproblem with no
-solution. :func:`restore_start` moves the start to the nearest point (in the scaled norm of
-the trust region) that meets them; if no such point exists, an elastic linear program
-certifies it: its optimal total slack, the least violation any point can have, is positive.
-
-:func:`run_phase1` is the nonlinear counterpart: the same engine on the same program, its objective
-dropped (``phase1``), so the SCP minimises the :math:`\\ell_1` violation of the nonlinear constraints alone.
-When it stalls with the violation still positive, no nearby point is feasible (a local
-certificate of infeasibility; Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.2
-and 18.5 on elastic modes).
+:func:`restore_start` moves a start that breaks the hard linear constraints ``A x = b, G x <= h`` (every subproblem
+keeps them) to the nearest point that meets them, or certifies that there is none. :func:`run_phase1` is the
+nonlinear counterpart: the same engine with the objective dropped minimises the :math:`\\ell_1` violation alone, and a
+stall with the violation positive is a local certificate of infeasibility (Nocedal & Wright, *Numerical
+Optimization*, 2nd ed., Sec. 17.2 and 18.5 on elastic modes; docs/engine.md, 'Restoration and phase 1').
 """
 
 from __future__ import annotations
@@ -58,14 +52,11 @@ def linear_violation(lin: LinearConstraints, x: np.ndarray) -> float:
 
 
 def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 1e-9) -> Restoration:
-    """The point nearest ``x0`` on ``A x = b, G x <= h`` (scaled norm), or a certificate of inconsistency.
-
-    Solves :math:`\\min \\tfrac12 \\|v\\|^2` s.t. :math:`A(x_0 + S v) = b,\\ G(x_0 + S v) \\le h` with
-    :math:`S` the variable scale (in closed form, by least squares, when there are only equalities). If that
-    has no solution, the elastic LP
+    """The point nearest ``x0`` on ``A x = b, G x <= h`` (scaled norm), or a certificate of inconsistency: solves
+    :math:`\\min \\tfrac12 \\|v\\|^2` s.t. :math:`A(x_0 + S v) = b,\\ G(x_0 + S v) \\le h` with :math:`S` the variable
+    scale (by least squares when there are only equalities); if that has no solution, the elastic LP
     :math:`\\min 1^T(p + n + s)` s.t. :math:`A S v + p - n = b - A x_0,\\ G S v - s \\le h - G x_0`,
-    :math:`p, n, s \\ge 0` gives the least total violation, which is the certificate.
-    """
+    :math:`p, n, s \\ge 0` gives the least total violation, which is the certificate."""
     lin = program.linear_constraints()
     if linear_violation(lin, x0) <= tolerance:
         return Restoration(x0, 0.0)
@@ -107,12 +98,9 @@ def _least_violation(A: sp.csc_matrix, rhs: np.ndarray, n_a: int, n_g: int) -> f
 
 
 def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
-    """At the largest penalty and still infeasible: minimise the violation alone from ``state`` (a phase-1 run of
-    the same engine, the objective dropped).
-
-    A feasible point found this way restarts the main loop from it; a phase-1 stall with the violation positive is
-    the certificate of infeasibility: local, or global when every map of the program is affine (a convex program).
-    """
+    """At the largest penalty and still infeasible: minimise the violation alone from ``state`` (a phase-1 run of the
+    same engine, the objective dropped). A feasible point found so restarts the main loop from it; a phase-1 stall
+    with the violation positive is the certificate of infeasibility: local, or global when every map is affine."""
     if state.phase1_runs >= MAX_PHASE1_RUNS:
         state.finish("max_iterations", "iterates stalled with constraints violated after a phase-1 restart: "
                      + describe_violations(state.ev))

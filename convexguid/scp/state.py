@@ -1,9 +1,7 @@
 """What the SCP loop carries from one iteration to the next, and what it hands back.
 
-:class:`IterationState` is the whole state of :class:`~convexguid.scp.engine.SCPAlgorithm`:
-the iterate and its evaluation, the merit value, the trust radius, the penalty weight, the
-multipliers of the last subproblem, the counters and clocks. A step reads it and returns it
-updated, so a run can be inspected, logged or resumed between any two iterations.
+:class:`IterationState` is the whole state of :class:`~convexguid.scp.engine.SCPAlgorithm`: a step reads it and
+returns it updated, so a run can be inspected, logged or resumed between any two iterations.
 """
 
 from __future__ import annotations
@@ -36,12 +34,9 @@ class IterationRecord:
 
 @dataclass
 class IterationState:
-    """The state of one SCP run between two steps.
-
-    ``raw`` is the program's own evaluation at ``x`` (with Jacobians); ``ev`` adds the values of
-    the output constraints, so every constraint the merit function penalizes is in one place.
-    ``status`` stays ``None`` while the run goes on.
-    """
+    """The state of one SCP run between two steps: ``raw`` is the program's own evaluation at ``x`` (with
+    Jacobians), ``ev`` adds the output constraints' values (every constraint the merit function penalizes, in one
+    place); ``status`` stays ``None`` while the run goes on."""
 
     x: np.ndarray
     raw: Evaluation
