@@ -13,6 +13,7 @@ import pytest
 from example_modules import load_example
 
 from convexguid.classics.bench import published_figure
+from convexguid.errors import SolverError
 from convexguid.ocp import Problem
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
@@ -286,6 +287,38 @@ def test_an_infeasible_repaired_program_is_unverified_naming_the_repair():
     outcome = solve_verified(_Point(0.0, 1.0), SCPSettings(), _TighteningChecker())
     assert outcome.status == "unverified"
     assert "both bounds tightened by 0.1" in outcome.message and "not proved infeasible" in outcome.message
+
+
+class _UnflyableChecker:
+    """A dense check that cannot fly the plan (its dynamics blow up along it)."""
+
+    def check(self, program, x):
+        raise SolverError("the plan could not be flown from t = 0 to 1: more than 50000 evaluations")
+
+    def repair(self, program, x, check, attempt):
+        return None
+
+
+def test_a_converged_plan_that_cannot_be_flown_is_unverified_saying_why():
+    outcome = solve_verified(_Point(0.0, 1.0), SCPSettings(), _UnflyableChecker())
+    assert outcome.result.status == "converged" and outcome.status == "unverified"
+    assert "not verified: the plan could not be flown" in outcome.message
+
+
+def test_a_flight_that_would_take_millions_of_steps_stops_at_the_evaluation_budget():
+    """x' = -1e7 x over 10 s: an explicit integrator's stable step is below 1e-6 s. The flight is refused after
+    MAX_RATE_EVALUATIONS, instead of integrating for minutes."""
+    from convexguid.ocp.mesh import MAX_RATE_EVALUATIONS, fly
+
+    calls = []
+
+    def rate(x, u, t):
+        calls.append(t)
+        return -1e7 * x
+
+    with pytest.raises(SolverError, match="could not be flown"):
+        fly(rate, lambda t: 0.0, (0.0, 10.0), np.array([1.0]), atol=1e-12)
+    assert len(calls) == MAX_RATE_EVALUATIONS
 
 
 def test_a_failed_check_names_a_control_that_jumps_across_its_range():

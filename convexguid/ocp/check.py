@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from convexguid.ocp.boundary import boundary_errors
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
@@ -26,6 +25,7 @@ from convexguid.ocp.mesh import (
     JUMP_SHARE,
     LOCAL_ERROR_TOLERANCE,
     control_jumps,
+    fly,
     held_control,
     interval_errors,
     interval_flows,
@@ -109,8 +109,7 @@ class DenseChecker:
         times, states = [], []
         for k in range(program.N):
             grid = np.linspace(node_times[k], node_times[k + 1], self.points + 1)
-            run = solve_ivp(lambda t, x: rate(x, u(t), t), (grid[0], grid[-1]), state,
-                            method="DOP853", t_eval=grid, rtol=1e-10, atol=1e-12)
+            run = fly(rate, u, (grid[0], grid[-1]), state, t_eval=grid, atol=1e-12)
             keep = slice(None) if k == 0 else slice(1, None)
             times.append(run.t[keep])
             states.append(run.y.T[keep])

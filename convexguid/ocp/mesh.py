@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from convexguid.errors import SpecError
+from convexguid.errors import SolverError, SpecError
 from convexguid.ocp.parts import NumericFunction
 
 if TYPE_CHECKING:  # the transcriptions import this module
@@ -46,6 +46,11 @@ case: halving it divides its error by 32; where that proves optimistic the next 
 
 MAX_PIECES = 4
 """At most this many pieces per interval in one refinement (Betts' bound on the points added to one interval)."""
+
+MAX_RATE_EVALUATIONS = 50_000
+"""Evaluations of the dynamics one interval's flight may take (DOP853 takes 12 a step: about 4000 steps; the
+classics' flights take a few hundred). A plan flown where its dynamics blow up (a density exp(-h / H) at a
+position guessed deep below the surface) otherwise keeps the dense check integrating for as long as it is let."""
 
 JUMP_SHARE = 0.5
 """A control whose value moves by more than this share of its range between neighbouring values is named."""
@@ -95,14 +100,39 @@ def held_control(program: Transcription, z: np.ndarray):
     return lambda t: np.clip(planned(t), low, high)
 
 
+class _TooManyEvaluations(Exception):
+    pass
+
+
+def fly(rate, control, span: tuple[float, float], start: np.ndarray, **options):
+    """SciPy's DOP853 (rtol 1e-10) flight of :math:`x' = f(x, u(t), t)` (``rate``, ``control``) over ``span`` from
+    ``start`` (``options``: ``t_eval``, ``atol``, ``dense_output``); :class:`~convexguid.errors.SolverError` past
+    :data:`MAX_RATE_EVALUATIONS`."""
+    count = 0
+
+    def counted(t, x):
+        nonlocal count
+        count += 1
+        if count > MAX_RATE_EVALUATIONS:
+            raise _TooManyEvaluations
+        return rate(x, control(t), t)
+
+    try:
+        return solve_ivp(counted, span, start, method="DOP853", rtol=1e-10, **options)
+    except _TooManyEvaluations:
+        raise SolverError(f"the plan could not be flown from t = {span[0]:.6g} to {span[1]:.6g}: more than "
+                          f"{MAX_RATE_EVALUATIONS} evaluations of the dynamics (stiff or blowing up along the "
+                          "plan)") from None
+
+
 def interval_flows(program: Transcription, z: np.ndarray, control=None) -> list:
     """Each interval integrated from its own start node under ``control`` (default :func:`held_control`) with DOP853
     (rtol 1e-10), SciPy's result with its dense output ``sol``, one per interval."""
     u = held_control(program, z) if control is None else control
     rate, scales = NumericFunction(program.rate), program.state_scales
     states, times = program.states(z), program.final_time(z) * program.node_shares()
-    return [solve_ivp(lambda t, x: rate(x, u(t), t), (times[k], times[k + 1]), states[k],
-                      method="DOP853", rtol=1e-10, atol=1e-12 * scales, dense_output=True) for k in range(program.N)]
+    return [fly(rate, u, (times[k], times[k + 1]), states[k], atol=1e-12 * scales, dense_output=True)
+            for k in range(program.N)]
 
 
 def interval_errors(program: Transcription, z: np.ndarray, flows: list | None = None) -> np.ndarray:

@@ -124,9 +124,10 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
         report("dense check, round", attempt + 1)
         try:
             check = checker.check(program, result.x)
-        except SolverError:
-            if result.status == "converged":
-                raise
+        except SolverError as error:
+            if result.status in ("converged", "unverified"):  # a plan the dense check cannot judge is not verified
+                return VerifiedSolve(program, result, None, "unverified", f"{result.message}; not verified: {error}",
+                                     rounds)
             # the last iterate of a failed solve may not even propagate; its status says why
             return VerifiedSolve(program, result, None, result.status, result.message, rounds)
         v = check.verification
