@@ -220,6 +220,23 @@ def test_a_wrong_statement_is_one_line_naming_it(statement, message):
     assert "\n" not in str(error.value)
 
 
+def test_a_derivative_that_is_not_a_number_at_the_iterate_is_named():
+    """Drag |v| v from rest: CasADi's derivative of the norm at v = 0 is 0/0. Every subproblem fails; the status says
+    which map's linearization is not a number, not only that the backend failed."""
+    p = Problem("drag-from-rest")
+    x, y = p.state("x", initial=0.0, final=1.0), p.state("y", initial=0.0, final=0.5)
+    vx, vy = p.state("vx", initial=0.0, final=0.0), p.state("vy", initial=0.0, final=0.0)
+    ux, uy = p.control("ux", bounds=(-2.0, 2.0)), p.control("uy", bounds=(-2.0, 2.0))
+    speed = ca.norm_2(ca.vertcat(vx, vy))  # at rest along the whole straight-line guess
+    p.dynamics({x: vx, y: vy, vx: ux - speed * vx, vy: uy - speed * vy})
+    p.final_time(fixed=2.0)
+    p.minimize_energy()
+    p.transcription(10)
+    solution = p.solve()
+    assert solution.status == "solver_error"
+    assert "not a number in dynamics_defects" in solution.message
+
+
 def test_an_incomplete_problem_is_refused_before_the_solve():
     p = Problem("demo")
     x = p.state("x", initial=0.0, final=1.0)

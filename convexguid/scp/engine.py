@@ -39,7 +39,7 @@ from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
 from convexguid.scp.endgame import SecondOrderModels, linearized_violation
-from convexguid.scp.evaluations import ProgramEvaluations
+from convexguid.scp.evaluations import ProgramEvaluations, not_finite
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, has_jacobian
 from convexguid.scp.merit import (
     decrease_ratio,
@@ -235,8 +235,12 @@ class SCPAlgorithm:
             state.radius = self.trust_region.after_failure(state.radius)
             self.record(state, 0.0, float("nan"), False, result)
             if state.failures > self.settings.max_backend_failures:
+                broken = not_finite(state.raw)
                 state.finish("solver_error", f"backend {self.solver_label} returned {result.status} "
-                                             f"{state.failures} times in a row")
+                                             f"{state.failures} times in a row" + (
+                                                 f"; the linearization at the iterate is not a number in {broken}: "
+                                                 "a derivative undefined there (a norm or a root at zero?)"
+                                                 if broken else ""))
             return self._check_limit(state)
         state.failures = 0
         d = assembler.step(result.x)

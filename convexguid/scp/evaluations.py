@@ -15,6 +15,20 @@ MAX_TRIALS_KEPT = 8
 and a second-order correction of each)."""
 
 
+def not_finite(ev: Evaluation) -> str:
+    """The maps whose values or Jacobians have entries that are not numbers at this evaluation (a derivative
+    undefined there: CasADi's derivative of a norm at zero is 0/0), or ``""``."""
+    parts = [("residuals", ev.residuals, ev.residual_jacobian)]
+    parts += [(b.name, b.values, b.jacobian) for b in (*ev.inequalities, *ev.equalities, *ev.cones)]
+    named = []
+    for name, values, jacobian in parts:
+        entries = getattr(jacobian, "data", jacobian)
+        bad = int(np.sum(~np.isfinite(values))) + (0 if entries is None else int(np.sum(~np.isfinite(entries))))
+        if bad:
+            named.append(f"{name} ({bad} entries)")
+    return ", ".join(named)
+
+
 class ProgramEvaluations:
     """``program.evaluate(x, jacobians)``, keeping the evaluations without Jacobians made since the last one with
     them; at one of those points (the same array, unchanged) ``with_jacobians`` only adds them (the same numbers)."""
