@@ -370,6 +370,21 @@ def test_a_state_whose_stated_values_are_negligible_is_scaled_by_the_change_its_
     assert scales["y"] == 1.85e5 and scales["m"] == 117000.0  # values of a sensible size are kept
 
 
+def test_a_stated_size_is_kept_when_the_rate_only_pulls_the_state_back():
+    """Betts' and GPOPS-II's hypersensitive problem: x' = -x^3 + u from 1 to 1.5 over 10000. Its rate on the guess,
+    3.4, sustained over the horizon would reach 33750, which replaced the stated 1.5 and made every subproblem fail;
+    the rate pulls x back within 1 / |df/dx| = 0.15, so 1.5 stays. The integral of x^2 + u^2, with nothing stated,
+    is still scaled by its rate over the horizon."""
+    problem = Problem("hypersensitive")
+    x = problem.state("x", initial=1.0, final=1.5)
+    u = problem.control("u")
+    problem.dynamics({x: -x**3 + u})
+    problem.final_time(fixed=10000.0)
+    problem.minimize_integral(0.5 * (x**2 + u**2), name="J")
+    x_scale, cost_scale = problem.state_scales()
+    assert x_scale == 1.5 and cost_scale == pytest.approx(10000.0 * 0.5 * 1.5**2)
+
+
 def _minimum_time_beside_ipopt(build):
     """The problem ``build()`` states solved, converged and verified at IPOPT's final time on the same first grid
     (within 0.1%: the dense check may refine the grid), and IPOPT's answer."""

@@ -26,13 +26,10 @@ import numpy as np
 
 from convexguid.errors import SpecError
 from convexguid.ocp.declarations import PathConstraint, Variable, number
+from convexguid.ocp.scaling import estimated_scales
 from convexguid.ocp.size import check_problem_size
 
 TRANSCRIPTION_METHODS = ("hermite-simpson", "zoh", "foh", "chebyshev", "flow")
-
-NEGLIGIBLE = 1e-4
-"""A state's bounds and boundary values give its scale unless all are below this share of the change its rate can
-make over the horizon (:meth:`Problem.state_scales`)."""
 """The transcriptions :meth:`Problem.transcription` offers (:mod:`convexguid.ocp.hermite_simpson`,
 :mod:`convexguid.ocp.hold`, :mod:`convexguid.ocp.chebyshev`; ``"flow"``: a closed-form flow, :meth:`Problem.flow`)."""
 
@@ -466,38 +463,9 @@ class Problem:
         return start, end, control
 
     def state_scales(self) -> np.ndarray:
-        """Each state's magnitude: its scale, or, when nothing stated gives its size (or the stated values are all
-        below :data:`NEGLIGIBLE` of it), the change its rate can make over the horizon, :math:`t_f \\max |f_i|` over
-        the straight-line guess (at five instants) with each control at its guess and across its range in turn (nine
-        values between finite bounds), when that is above 1. The trust region is a box in scaled variables: COPS'
-        particle steering, a position near 12 scaled by 1, held every step to 0.03-0.5 (100 iterations, no
-        convergence); Dymos' single stage to orbit, a vertical speed started at 1e-6 m/s and scaled so, had defects of
-        1e7 and every subproblem failed. The estimate is crude, so values of a sensible size are kept (raised to it,
-        Betts' shuttle took 491 iterations, not 169). The defects and the final-state check use the same magnitude."""
-        scales = np.array([v.scale for v in self.states])
-        unknown = [i for i, v in enumerate(self.states) if v.scale_from != "stated"]
-        if not unknown:
-            return scales
-        horizon = self.tf if self.tf is not None else self.tf_guess
-        start, end, guess = self.straight_line()
-        samples = [guess]
-        for j, v in enumerate(self.controls):
-            values = np.linspace(v.lower, v.upper, 9) if v.lower is not None and v.upper is not None else \
-                [b for b in (v.lower, v.upper) if b is not None]
-            samples += [np.where(np.arange(guess.size) == j, value, guess) for value in values]
-        rate = ca.Function("rate", [self.state_vector(), self.control_vector(), self.time], [self.rate_vector()])
-        largest = np.zeros(len(self.states))
-        for share in np.linspace(0.0, 1.0, 5):
-            for u in samples:
-                value = np.abs(np.asarray(rate(start + share * (end - start), u, share * horizon)).ravel())
-                largest = np.maximum(largest, np.where(np.isfinite(value), value, 0.0))
-        change = horizon * largest
-        for i in unknown:
-            if self.states[i].scale_from == "none":
-                scales[i] = max(change[i], 1.0)
-            elif scales[i] < NEGLIGIBLE * change[i]:
-                scales[i] = change[i]
-        return scales
+        """Each state's magnitude: its scale, or what its rate can do over the horizon when nothing stated gives its
+        size (:func:`~convexguid.ocp.scaling.estimated_scales`). The defects and the final-state check use it too."""
+        return estimated_scales(self)
 
     @property
     def free_time(self) -> bool:
