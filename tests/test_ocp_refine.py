@@ -26,13 +26,11 @@ from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.mesh import (
     LOCAL_ERROR_TOLERANCE,
     chattering_intervals,
-    control_jumps,
     interval_errors,
     order_reduction,
     pieces_wanted,
     plan_refinement,
     refined_program,
-    reversed_jumps,
 )
 from convexguid.ocp.solve import _settings, transcribe
 from convexguid.scp.check_repair import solve_verified
@@ -235,24 +233,6 @@ def test_a_chattering_control_marks_its_intervals():
     values[6] = 5.0  # and node 6 (intervals 5 and 6)
     z[program.control_start: program.slack_start] = values.ravel()
     assert list(np.flatnonzero(chattering_intervals(program, z))) == [3, 5, 6]
-
-
-def test_one_switch_of_a_control_is_not_chatter_and_a_jump_there_and_back_is():
-    """A bang-bang switch between two values is what the collocation should hold; only jumps reversed within the
-    next two values (up, down) ask for the controls held linear."""
-    program = HermiteSimpsonProgram(forced_oscillator(intervals=10))
-    z = program.initial_guess()
-    order = np.argsort(program.control_value_shares(), kind="stable")
-    switch = np.where(np.arange(order.size) < 9, -5.0, 5.0)  # one switch, between the 9th and 10th values in time
-    values = np.empty_like(switch)
-    values[order] = switch
-    z[program.control_start: program.slack_start] = values
-    assert control_jumps(program, z)[1].sum() == 1 and reversed_jumps(program, z) == 0
-    switch[12] = -5.0  # a value thrown back across the range and returned: two jumps each way
-    values[order] = switch
-    z[program.control_start: program.slack_start] = values
-    assert control_jumps(program, z)[1].sum() == 3
-    assert reversed_jumps(program, z) == 2  # the spike's two jumps; the switch three values before it stays one
 
 
 def test_a_point_constraint_off_the_uneven_grid_is_refused():

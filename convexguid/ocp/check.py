@@ -31,7 +31,6 @@ from convexguid.ocp.mesh import (
     interval_flows,
     plan_refinement,
     refined_program,
-    reversed_jumps,
 )
 from convexguid.ocp.parts import Margins, NumericFunction
 from convexguid.ocp.transcription import Transcription
@@ -247,20 +246,19 @@ class DenseChecker:
     def refine(self, program: Transcription, z: np.ndarray, check: Check) -> Repair | None:
         """A finer grid with the plan carried over, at most :data:`MAX_INTERVALS` intervals; None when none fits.
         Hermite-Simpson splits where the error is (:func:`~convexguid.ocp.mesh.plan_refinement`: the local error,
-        the constraints the dense check broke, a chattering control), after holding the controls linear on the same
-        grid when one chatters (:func:`~convexguid.ocp.mesh.reversed_jumps`: a jump there and back, not one switch);
-        the other transcriptions double every interval."""
+        the constraints the dense check broke, a chattering control); the other transcriptions double every
+        interval."""
         if isinstance(program, HermiteSimpsonProgram):
-            jumps = 0 if program.linear_control else reversed_jumps(program, z)
+            jumps = 0 if program.linear_control else int(control_jumps(program, z)[1].sum())
             if jumps:
                 # a plan whose flight misses its final state by a large share of the scales has the chatter's states,
                 # not the dynamics': the regularized program starts from its own first guess instead
                 carry = check.verification.final_state_error <= CARRIED_FINAL_ERROR
                 linear, start = program.with_linear_control(z, carry)
                 return Repair(linear, start, f"the controls held linear between node values on the same grid (the "
-                                             f"plan failed its check with {jumps} jumps there and back of a control "
-                                             f"by more than {JUMP_SHARE:.0%} of its range between neighbouring "
-                                             "values: an optimum of the collocation that chatters), started "
+                                             f"plan failed its check with {jumps} jumps of a control by more than "
+                                             f"{JUMP_SHARE:.0%} of its range between neighbouring values: an "
+                                             "optimum of the collocation that chatters), started "
                                              + ("from the plan's nodes" if carry else "from the first guess"))
             tolerance = min(LOCAL_ERROR_TOLERANCE, program.problem.mesh_tolerance or LOCAL_ERROR_TOLERANCE)
             plan = plan_refinement(program, z, self._broken_intervals(program, check), MAX_INTERVALS, tolerance)

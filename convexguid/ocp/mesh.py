@@ -157,22 +157,6 @@ def control_jumps(program: Transcription, z: np.ndarray) -> tuple[np.ndarray, np
     return shares[order], jumps
 
 
-def reversed_jumps(program: Transcription, z: np.ndarray) -> int:
-    """How many of the jumps (:func:`control_jumps`) a jump of the same control the other way follows or precedes
-    within two neighbouring pairs of values: a chatter (up, down, up) rather than one switch of a bang-bang control
-    (COPS' robot arm switches from -0.75 to 0.63 between a node and its midpoint: a switch, which the collocation
-    holds as it should)."""
-    shares = program.control_value_shares()
-    values = program.control_values(program.unwrapped(z))[np.argsort(shares, kind="stable")]
-    signed = np.sign(np.diff(values, axis=0)) * control_jumps(program, z)[1]
-    reversed_ = np.zeros(signed.shape, dtype=bool)
-    for lag in (1, 2):
-        opposite = (signed[lag:] * signed[:-lag]) < 0
-        reversed_[lag:] |= opposite
-        reversed_[:-lag] |= opposite
-    return int(reversed_.sum())
-
-
 def chattering_intervals(program: Transcription, z: np.ndarray) -> np.ndarray:
     """Whether some control jumps (:func:`control_jumps`) between two neighbouring values inside each interval, or
     between a node and the values on either side of it (both intervals), shape ``(N,)``."""
