@@ -57,10 +57,10 @@ def estimated_scales(problem: Problem) -> np.ndarray:
         for control in samples:
             value, pull = (np.asarray(a, dtype=float).ravel()
                            for a in rate(start + share * (end - start), control, share * horizon))
-            moved = horizon * np.where(np.isfinite(value), np.abs(value), 0.0)
-            change = np.maximum(change, moved)
-            relaxed = np.where(np.isfinite(pull) & (pull < 0), np.abs(value) / np.where(pull < 0, -pull, 1.0), np.inf)
-            reach = np.maximum(reach, np.minimum(moved, np.where(np.isfinite(relaxed), relaxed, moved)))
+            speed = np.where(np.isfinite(value), np.abs(value), 0.0)
+            relaxation = np.where(pull < 0, 1.0 / np.where(pull < 0, -pull, 1.0), np.inf)  # NaN pulls: none
+            change = np.maximum(change, horizon * speed)
+            reach = np.maximum(reach, speed * np.minimum(horizon, relaxation))
     for i in unknown:
         if problem.states[i].scale_from == "none":
             scales[i] = max(change[i], 1.0)

@@ -34,12 +34,12 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from convexguid.ocp import periodic
 from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
 from convexguid.ocp.curvature import ElementCurvature, interval_of_rows
 from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.guess import flown_free_states
 from convexguid.ocp.parts import DERIVATIVES, AffineCones, Margins, SparsityPattern, SymbolicNLP
-from convexguid.ocp.periodic import control_periods
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
 from convexguid.scp.problem import ConstraintBlock, CurvatureModel, Evaluation, LinearConstraints, OutputConstraints
 
@@ -136,7 +136,7 @@ class Transcription:
     @cached_property
     def control_periods(self) -> tuple[float | None, ...]:
         """Each control's period, stated or recognized (:func:`~convexguid.ocp.periodic.control_periods`)."""
-        return control_periods(self.problem)
+        return periodic.control_periods(self.problem)
 
     def unwrapped(self, z: np.ndarray) -> np.ndarray:
         """``z`` with every periodic control's values (stated or recognized: :mod:`convexguid.ocp.periodic`) shifted
