@@ -30,7 +30,7 @@ def small_qp(shift: float = 0.0) -> ConicProgram:
     return ConicProgram(P, q, A, b, Cones(zero=1, nonneg=1))
 
 
-@pytest.mark.parametrize("name", ["clarabel", "osqp", "qpsolvers:clarabel", "daqp", "auto"])
+@pytest.mark.parametrize("name", ["clarabel", "osqp", "piqp", "qpsolvers:clarabel", "daqp", "auto"])
 def test_backends_agree_on_a_qp_with_known_solution(name):
     backend = make_backend(name, small_qp(), tolerance=1e-9)
     res = backend.solve()
@@ -83,11 +83,12 @@ def test_update_rejects_a_new_sparsity_pattern():
         backend.update(other)
 
 
-def test_osqp_refuses_second_order_cones():
+@pytest.mark.parametrize("name", ["osqp", "piqp"])
+def test_qp_backends_refuse_second_order_cones(name):
     prog = ConicProgram(sp.csc_matrix((3, 3)), np.array([1.0, 0, 0]), sp.csc_matrix(-np.eye(3)), np.zeros(3),
                         Cones(soc=(3,)))
     with pytest.raises(BackendError):
-        make_backend("osqp", prog)
+        make_backend(name, prog)
     res = make_backend("clarabel", prog).solve()
     assert res.status == "optimal" and res.x[0] == pytest.approx(0.0, abs=1e-6)
 
@@ -144,6 +145,67 @@ def test_daqp_solves_penalty_slacks_as_pieces_exactly(seed):
     np.testing.assert_allclose(res.z[:8], ref.z[:8], atol=1e-6)
     # the opposite rows of an |.| penalty: only their difference is determined
     np.testing.assert_allclose(res.z[8:10] - res.z[10:12], ref.z[8:10] - ref.z[10:12], atol=1e-6)
+
+
+def with_second_bound(program: ConicProgram, var: int, limit: float) -> ConicProgram:
+    """``program`` with one more row, ``x_var <= limit``, after its others: a second upper bound on that variable."""
+    row = sp.csc_matrix(([1.0], ([0], [var])), shape=(1, program.A.shape[1]))
+    cones = Cones(zero=program.cones.zero, nonneg=program.cones.nonneg + 1)
+    return ConicProgram(program.P, program.q, sp.vstack([program.A, row]).tocsc(), np.append(program.b, limit), cones)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_piqp_takes_single_variable_rows_as_bounds_and_returns_every_rows_multiplier(seed):
+    """The slacks' and the box's rows become PIQP's bounds; the answer is Clarabel's, and the multipliers handed back
+    in the program's own rows meet the KKT conditions (a bound's on the tighter of its two rows)."""
+    program = with_second_bound(penalized_qp(seed), var=seed % 6, limit=0.3)
+    backend = make_backend("piqp", program, tolerance=1e-10)
+    assert backend._layout.bound_rows.size == 6 + 12 + 1 and backend._layout.ineq_rows.size == 2 + 4 + 4
+    res = backend.solve()
+    ref = make_backend("clarabel", program, tolerance=1e-10).solve()
+    assert res.status == ref.status == "optimal"
+    assert res.objective == pytest.approx(ref.objective, rel=1e-8, abs=1e-8)
+    np.testing.assert_allclose(res.x, ref.x, atol=1e-7)
+    nz, z, x = program.cones.zero, res.z, res.x
+    assert np.all(z[nz:] >= 0)
+    stationarity = program.hessian_times(x) + program.q + program.A.T @ z
+    assert np.max(np.abs(stationarity)) <= 1e-6
+    assert np.max(np.abs(z[nz:] * (program.b - program.A @ x)[nz:])) <= 1e-6
+    np.testing.assert_allclose(z[:nz], ref.z[:nz], atol=1e-6)
+    assert z[-1] > 0 and z[12 + 6 + seed % 6] == 0.0  # x_var <= 0.3 binds; its looser box row, 1.5, carries nothing
+
+
+def test_piqp_leaves_out_a_row_without_an_upper_limit(capfd):
+    """A row ``a'x <= inf`` bounds nothing: PIQP does not see it (nor warns about it), and its multiplier is zero."""
+    program = penalized_qp(4)
+    program.b = program.b.copy()
+    program.b[2] = np.inf  # the first hard inequality
+    res = make_backend("piqp", program, tolerance=1e-10).solve()
+    program.b[2] = 1e6  # Clarabel's answer with the row far from binding
+    ref = make_backend("clarabel", program, tolerance=1e-10).solve()
+    assert res.status == "optimal" and res.z[2] == 0.0
+    np.testing.assert_allclose(res.x, ref.x, atol=1e-6)
+    assert "PIQP" not in capfd.readouterr().out
+
+
+def test_piqp_follows_updates_and_a_bound_whose_sign_turns():
+    """Updates keep the layout while every bound row keeps its sign; a row whose coefficient changes sign is read
+    again (it bounds the other side), and the answers stay Clarabel's."""
+    first = penalized_qp(0)
+    backend = make_backend("piqp", first, tolerance=1e-10)
+    layout = backend._layout
+    for seed in (1, 2):
+        program = penalized_qp(seed)
+        backend.update(program)
+        assert backend._layout is layout
+        np.testing.assert_allclose(backend.solve().x, make_backend("clarabel", program).solve().x, atol=1e-6)
+    flipped = penalized_qp(3)
+    flipped.A = flipped.A.copy()
+    flipped.A[flipped.A.shape[0] - 1, 5] = 1.0  # the lower box row of x5 now reads x5 <= 1.5
+    backend.update(flipped)
+    res = backend.solve()
+    assert backend._layout is not layout
+    np.testing.assert_allclose(res.x, make_backend("clarabel", flipped).solve().x, atol=1e-6)
 
 
 def test_daqp_warm_start_follows_updates():

@@ -463,11 +463,12 @@ def test_a_start_off_the_boundary_conditions_moves_to_the_nearest_point_in_scale
 
 @pytest.mark.parametrize(("program", "backend", "label", "condensed"), [
     (RosenbrockDisk, "auto", "auto -> daqp (condensed)", True),  # 2 variables, dense residual Jacobian
-    (HS071Epigraph, "auto", "auto -> clarabel (sparse)", False),  # no residuals: nothing to condense
+    (HS071Epigraph, "auto", "auto -> piqp (sparse)", False),  # no residuals: nothing to condense; no cones
     (RosenbrockDisk, "clarabel", "clarabel", False),  # explicit names as they always were
     (RosenbrockDisk, "osqp", "osqp", False),
+    (RosenbrockDisk, "piqp", "piqp", False),
     (RosenbrockDisk, "daqp", "daqp", True),  # the dense backend always gets the condensed form
-], ids=["auto-dense", "auto-no-residuals", "clarabel", "osqp", "daqp"])
+], ids=["auto-dense", "auto-no-residuals", "clarabel", "osqp", "piqp", "daqp"])
 def test_the_backend_setting_is_resolved_once_and_reported(program, backend, label, condensed):
     algorithm = engine.SCPAlgorithm(program(), SCPSettings(backend=backend, **HS071_SETTINGS))
     result = algorithm.run()

@@ -15,6 +15,7 @@ factorisation.
 
 Names: ``auto`` (the default: :func:`~convexguid.backends.registry.auto_backend`; the SCP
 decides by :mod:`convexguid.scp.choice`), ``clarabel`` (QP and SOCP), ``osqp`` (QP only),
+``piqp`` (sparse QP with its single-variable rows as bounds, :mod:`convexguid.backends.bounded`),
 ``daqp`` (dense active-set QP, :mod:`convexguid.backends.dense`; the SCP hands it the condensed
 subproblem), and ``qpsolvers:<solver>`` for every QP solver that :mod:`qpsolvers` finds
 installed (re-solved from scratch each time: meant for cross-checks).

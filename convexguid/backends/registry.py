@@ -8,6 +8,7 @@ import time
 from functools import cache
 
 from convexguid.backends.base import Backend, BackendResult, ConicProgram
+from convexguid.backends.bounded import PiqpBackend
 from convexguid.backends.dense import DaqpBackend
 from convexguid.backends.solvers import ClarabelBackend, OsqpBackend, QpsolversBackend
 from convexguid.errors import BackendError
@@ -31,6 +32,8 @@ def native_backends() -> dict[str, type[Backend]]:
     natives: dict[str, type[Backend]] = {"clarabel": ClarabelBackend, "osqp": OsqpBackend}
     if importlib.util.find_spec("daqp") is not None:
         natives["daqp"] = DaqpBackend
+    if importlib.util.find_spec("piqp") is not None:
+        natives["piqp"] = PiqpBackend
     return natives
 
 

@@ -84,7 +84,7 @@ def main() -> int:
              "the one its dense check passed after a repair round held that limit between nodes, so its final mass "
              "sits slightly below IPOPT's."]
     text = bench_document("convexguid.ocp examples against IPOPT on the same NLP", ["numpy", "scipy", "casadi",
-                          "clarabel"], "python -m convexguid.benches.ocp_examples", caption, table, notes)
+                          "clarabel", "piqp"], "python -m convexguid.benches.ocp_examples", caption, table, notes)
     write_text_atomic(args.output, text)
     print(text)
     return 0

@@ -321,7 +321,7 @@ def document(proxops: tuple[list[dict], dict], descent: tuple[dict, dict, dict],
         "for the body rate, |T| for the minimum thrust.")
     body = (proxops_section(*proxops) + "\n\n" + descent_caption + "\n\n" + descent_section(*descent))
     return bench_document("convexguid and OpenSCvx on two of OpenSCvx's examples", ["numpy", "scipy", "casadi",
-                          "clarabel"], command, caption, body)
+                          "clarabel", "piqp"], command, caption, body)
 
 
 def main() -> int:

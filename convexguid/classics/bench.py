@@ -148,7 +148,7 @@ def document(rows: list[Row], command: str) -> str:
                "timed apart, and its plan is not re-propagated. A figure matches within "
                f"{AGREEMENT:.1%} of the published one.")
     return bench_document("Classic problems: convexguid and IPOPT from the paper's statement",
-                          ["numpy", "scipy", "casadi", "clarabel"], command, caption, table, summary)
+                          ["numpy", "scipy", "casadi", "clarabel", "piqp"], command, caption, table, summary)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -25,7 +25,7 @@ from convexguid.robustness.report import render
 from convexguid.robustness.trial import Trial, judged, run_trial
 
 DEFAULT_OUTPUT = Path("validation/ROBUSTNESS.md")
-PACKAGES = ("numpy", "scipy", "clarabel", "daqp", "osqp", "casadi", "dask")
+PACKAGES = ("numpy", "scipy", "clarabel", "piqp", "daqp", "osqp", "casadi", "dask")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -6,15 +6,19 @@ linearized equalities and on each second-order cone (an exact l1 penalty, so eve
 
 .. math::
 
-    \\min\\; y^T W y + c^T d + \\rho\\,(1^T s_o + 1^T s_g + 1^T t)
+    \\min\\; y^T W y + c^T d + \\rho\\,(1^T s_o + 1^T s_g + 1^T t_+ + 1^T t_- + 1^T s_c)
 
     \\text{s.t.}\\quad A d = b - A x,\\quad \\nabla r\\, d - y = -r,\\quad G d \\le h - G x,\\quad M y - s_o \\le m,
 
-    g + \\nabla g\\, d \\le s_g,\\quad |e + \\nabla e\\, d| \\le t,\\quad
-    \\|v_{1:} + F_{1:} d\\| \\le v_0 + F_0 d + s_c,\\quad s_o, s_g, t, s_c \\ge 0,\\quad |d_i| \\le \\Delta\\,\\sigma_i
+    g + \\nabla g\\, d \\le s_g,\\quad e + \\nabla e\\, d = t_+ - t_-,\\quad
+    \\|v_{1:} + F_{1:} d\\| \\le v_0 + F_0 d + s_c,\\quad s_o, s_g, t_\\pm, s_c \\ge 0,
+    \\quad |d_i| \\le \\Delta\\,\\sigma_i
 
 with :math:`\\Delta` the trust radius, :math:`\\sigma` the variable scale and :math:`v = Fx + f` each cone's affine map
-(:class:`~convexguid.scp.problem.ConeBlock`, exact); the backend sees the scaled step :math:`d_i/\\sigma_i`.
+(:class:`~convexguid.scp.problem.ConeBlock`, exact); the backend sees the scaled step :math:`d_i/\\sigma_i`. Each
+linearized equality is one row of the zero cone between its two slacks: written as the pair
+:math:`|e + \\nabla e\\, d| \\le t` it would put its Jacobian in the KKT system twice (the condensed form keeps that
+pair, which the dense backend reads as one absolute-value penalty; :mod:`convexguid.scp.condensed`).
 :class:`SubproblemAssembler` maps block values straight into the CSC ``data`` arrays, so each iteration only copies
 numbers (why this form: docs/engine.md, 'Subproblem assembly: lifted and condensed').
 """
@@ -90,20 +94,23 @@ class SubproblemRows:
         self.n_cones = len(cone_sizes)
         n_a, n_g, n_o = linear.A.shape[0], linear.G.shape[0], outputs.M.shape[0]
         lifted_rows = self.m if lifted else 0
-        self.n_slack = n_o + self.n_ineq + self.n_eq + self.n_cones
+        # lifted: each equality one zero-cone row between two slacks; condensed: a +/- pair of rows on one slack
+        self.split = lifted
+        zero_eq, pair_rows, eq_slacks = (self.n_eq, 0, 2 * self.n_eq) if lifted else (0, self.n_eq, self.n_eq)
+        self.n_slack = n_o + self.n_ineq + eq_slacks + self.n_cones
         self.num_z = n + lifted_rows + self.n_slack
         so0 = n + lifted_rows
         sg0, t0 = so0 + n_o, so0 + n_o + self.n_ineq
-        self.cones = Cones(zero=n_a + lifted_rows,
-                           nonneg=n_g + n_o + self.n_ineq + 2 * self.n_eq + self.n_slack + 2 * n, soc=cone_sizes)
-        self.layout = DualLayout(n_a, lifted_rows, n_g, n_o, self.n_ineq, self.n_eq, sum(cone_sizes))
+        self.cones = Cones(zero=n_a + lifted_rows + zero_eq,
+                           nonneg=n_g + n_o + self.n_ineq + 2 * pair_rows + self.n_slack + 2 * n, soc=cone_sizes)
+        self.layout = DualLayout(n_a, lifted_rows, n_g, n_o, self.n_ineq, self.n_eq, sum(cone_sizes), lifted)
         pat = _Pattern((self.cones.rows, self.num_z))
-        # zero cone: A d = b - A x (; J d - y = -r)
+        # zero cone: A d = b - A x (; J d - y = -r; the equalities, whose entries the pattern takes last)
         _add_jacobian(pat, 0, linear.A, n_a, n)
         if lifted:
             _add_jacobian(pat, n_a, first.residual_jacobian, self.m, n)
             pat.add_diagonal(n_a, n, self.m)
-        row = n_a + lifted_rows
+        row = n_a + lifted_rows + zero_eq
         # nonnegative cone, in order: G, the outputs less their slacks, then the softened rows and the trust region
         _add_jacobian(pat, row, linear.G, n_g, n)
         row += n_g
@@ -112,8 +119,15 @@ class SubproblemRows:
         else:
             pat.add_dense(row, 0, n_o, n)
         pat.add_diagonal(row, so0, n_o)
-        row = _add_softened_rows(pat, row + n_o, first, n, (so0, sg0, t0), (self.n_ineq, self.n_eq, self.n_slack))
-        _add_cone_rows(pat, row, first.cones, cone_sizes, t0 + self.n_eq)
+        row = _add_softened_rows(pat, row + n_o, first, n, (so0, sg0, t0), (self.n_ineq, pair_rows, self.n_slack))
+        _add_cone_rows(pat, row, first.cones, cone_sizes, t0 + eq_slacks)
+        if lifted:
+            row = n_a + lifted_rows
+            for block in first.equalities:
+                _add_jacobian(pat, row, block.jacobian, block.values.size, n)
+                row += block.values.size
+            pat.add_diagonal(row - self.n_eq, t0, self.n_eq)
+            pat.add_diagonal(row - self.n_eq, t0 + self.n_eq, self.n_eq)
         pat.finish()
         self._a_pattern = pat
         # the subproblem is solved for the scaled step d / scale, which keeps it well conditioned
@@ -122,7 +136,8 @@ class SubproblemRows:
         self._unit_scale = bool(np.all(scale == 1.0))  # the column scaling then changes no number
         # the fixed entries of the softened rows, the slacks' bounds and the trust region
         self._fixed = {"ineq": -np.ones(self.n_ineq), "eq": -np.ones(self.n_eq), "slack": -np.ones(self.n_slack),
-                       "box": (1.0 / scale, -1.0 / scale), "cone": -np.ones(self.n_cones)}
+                       "box": (1.0 / scale, -1.0 / scale), "cone": -np.ones(self.n_cones),
+                       "eq_minus": np.ones(self.n_eq)}
 
     def constraints(self, x: np.ndarray, ev: Evaluation, radius: float | np.ndarray, head: list[np.ndarray],
                     head_rhs: list[np.ndarray]) -> tuple[sp.csc_matrix, np.ndarray]:
@@ -131,10 +146,11 @@ class SubproblemRows:
         right-hand sides after ``A``'s and ``G``'s (which this fills in)."""
         lin, fixed = self.linear, self._fixed
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
+        pairs = [] if self.split else [*jac_e, fixed["eq"], *(-j for j in jac_e), fixed["eq"]]
+        split = [*jac_e, fixed["eq"], fixed["eq_minus"]] if self.split else []
         A = self._a_pattern.matrix([
-            *head, *(_jacobian_data(b.jacobian) for b in ev.inequalities), fixed["ineq"],
-            *jac_e, fixed["eq"], *(-j for j in jac_e), fixed["eq"], fixed["slack"],
-            *fixed["box"], *(-_jacobian_data(b.jacobian) for b in ev.cones), fixed["cone"]])
+            *head, *(_jacobian_data(b.jacobian) for b in ev.inequalities), fixed["ineq"], *pairs, fixed["slack"],
+            *fixed["box"], *(-_jacobian_data(b.jacobian) for b in ev.cones), fixed["cone"], *split])
         if not self._unit_scale:
             A.data *= self._a_data_scale
         room = lin.h - lin.G @ x
@@ -142,8 +158,9 @@ class SubproblemRows:
         room[(room < 0) & (room > -1e-7 * (1 + np.abs(lin.h)))] = 0.0
         e = _values(ev.equalities)
         lifted_rhs, output_rhs = head_rhs
-        b = np.concatenate([lin.b - lin.A @ x, lifted_rhs, room, output_rhs, -_values(ev.inequalities), -e, e,
-                            np.zeros(self.n_slack), np.broadcast_to(radius, 2 * self.n), _values(ev.cones)])
+        zero_eq, pairs = ([-e], []) if self.split else ([], [-e, e])
+        b = np.concatenate([lin.b - lin.A @ x, lifted_rhs, *zero_eq, room, output_rhs, -_values(ev.inequalities),
+                            *pairs, np.zeros(self.n_slack), np.broadcast_to(radius, 2 * self.n), _values(ev.cones)])
         return A, b
 
     def multipliers(self, z: np.ndarray) -> Multipliers:
@@ -198,9 +215,10 @@ class SubproblemAssembler(SubproblemRows):
 @dataclass(frozen=True)
 class DualLayout:
     """Where each constraint's rows sit in a subproblem, lifted or condensed. Zero cone: ``A`` (``linear_equalities``
-    rows), then the lifted form's ``J d - y = -r`` rows (``residuals``). Nonnegative cone: ``G``, the output
-    constraints, the linearized inequalities, the linearized equalities as ``+`` and ``-`` rows (the multiplier is the
-    ``+`` row's dual less the ``-`` row's), then slacks and trust region. Second-order cones: the last ``cone_rows``."""
+    rows), then the lifted form's ``J d - y = -r`` rows (``residuals``) and, ``split``, its linearized equalities.
+    Nonnegative cone: ``G``, the output constraints, the linearized inequalities, the condensed form's linearized
+    equalities as ``+`` and ``-`` rows (the multiplier is the ``+`` row's dual less the ``-`` row's), then slacks and
+    trust region. Second-order cones: the last ``cone_rows``."""
 
     linear_equalities: int
     residuals: int
@@ -209,30 +227,33 @@ class DualLayout:
     inequalities: int
     equalities: int
     cone_rows: int = 0
+    split: bool = False
 
     def multipliers(self, z: np.ndarray) -> Multipliers:
-        sizes = [self.linear_equalities, self.residuals, self.linear_inequalities, self.outputs, self.inequalities,
-                 self.equalities, self.equalities]
+        zero_eq, pair = (self.equalities, 0) if self.split else (0, self.equalities)
+        sizes = [self.linear_equalities, self.residuals, zero_eq, self.linear_inequalities, self.outputs,
+                 self.inequalities, pair, pair]
         ends = np.cumsum(sizes)
-        a, _, g, o, i, plus, minus = (z[end - size: end] for end, size in zip(ends, sizes, strict=True))
+        a, _, e, g, o, i, plus, minus = (z[end - size: end] for end, size in zip(ends, sizes, strict=True))
         cone = z[z.size - self.cone_rows:].copy() if self.cone_rows else np.zeros(0)
-        return Multipliers(equality=plus - minus, inequality=i.copy(), output=o.copy(), linear_equality=a.copy(),
-                           linear_inequality=g.copy(), cone=cone)
+        return Multipliers(equality=e.copy() if self.split else plus - minus, inequality=i.copy(), output=o.copy(),
+                           linear_equality=a.copy(), linear_inequality=g.copy(), cone=cone)
 
 
 def _add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
                       counts: tuple[int, int, int]) -> int:
     """The rows after the output constraints: the linearized inequalities with their slacks, the linearized
-    equalities twice (``+`` and ``-``) with theirs, the nonnegativity of every slack, and the trust region on the
-    step's ``n`` columns. ``starts`` are the first columns of the output, inequality and equality slacks; ``counts``
-    the numbers of inequality rows, equality rows and slacks. Returns the next row."""
+    equalities twice (``+`` and ``-``) with theirs when paired here (``counts[1]`` rows, else none), the
+    nonnegativity of every slack, and the trust region on the step's ``n`` columns. ``starts`` are the first columns
+    of the output, inequality and equality slacks; ``counts`` the numbers of inequality rows, paired equality rows and
+    slacks. Returns the next row."""
     so0, sg0, t0 = starts
     n_ineq, n_eq, n_slack = counts
     for block in first.inequalities:
         _add_jacobian(pat, row, block.jacobian, block.values.size, n)
         row += block.values.size
     pat.add_diagonal(row - n_ineq, sg0, n_ineq)
-    for _ in range(2):
+    for _ in range(2 if n_eq else 0):
         for block in first.equalities:
             _add_jacobian(pat, row, block.jacobian, block.values.size, n)
             row += block.values.size

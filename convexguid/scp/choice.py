@@ -54,4 +54,6 @@ def choose_subproblem(name: str, n: int, first: Evaluation, weights: np.ndarray)
              and first.residuals.size > 0 and jacobian_density(first) >= DENSE_MIN_DENSITY)
     if dense:
         return SubproblemChoice("daqp", True, f"{AUTO} -> daqp (condensed)", fallback="clarabel")
+    if "piqp" in native_backends():  # the bounds apart from the rows (:mod:`convexguid.backends.bounded`)
+        return SubproblemChoice("piqp", False, f"{AUTO} -> piqp (sparse)", fallback="clarabel")
     return SubproblemChoice("clarabel", False, f"{AUTO} -> clarabel (sparse)")

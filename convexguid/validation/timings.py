@@ -20,7 +20,7 @@ from convexguid.families import get_family
 if TYPE_CHECKING:
     from convexguid.validation.run import CaseResult
 
-TIMED_PACKAGES = ("numpy", "scipy", "clarabel", "daqp", "osqp")
+TIMED_PACKAGES = ("numpy", "scipy", "clarabel", "piqp", "daqp", "osqp")
 """Versions listed with the machine: the packages whose speed the times mostly measure."""
 
 

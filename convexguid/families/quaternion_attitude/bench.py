@@ -381,8 +381,8 @@ def attitude_bench_markdown(rows: Sequence[AttitudeBenchRow], problem_path: str,
     table = markdown_grid(COLUMNS, align, [r.cells() for r in rows])
     return bench_document(
         f"convexguid attitude benchmark: SCP vs IPOPT on `{Path(problem_path).name}` against the grid size",
-        ("numpy", "scipy", "clarabel", "casadi"), _command(problem_path, intervals_list, repeat, output), caption,
-        table, _notes(rows, SCP_WALL_TARGETS_S.get(Path(problem_path).name)), ipopt_note)
+        ("numpy", "scipy", "clarabel", "piqp", "casadi"), _command(problem_path, intervals_list, repeat, output),
+        caption, table, _notes(rows, SCP_WALL_TARGETS_S.get(Path(problem_path).name)), ipopt_note)
 
 
 def run_attitude_bench(spec, intervals_list: Sequence[int] = DEFAULT_INTERVALS,
