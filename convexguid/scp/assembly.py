@@ -1,8 +1,9 @@
 """Assembly of the convex subproblem with a sparsity pattern fixed once.
 
-Its variables are ``z = [d, y, s_o, s_g, t, s_c]``: the step ``d`` from the iterate ``x``, the lifted residuals ``y``
-(linearized :math:`r`), and nonnegative slacks on the output constraints, the linearized inequalities, around the
-linearized equalities and on each second-order cone (an exact l1 penalty, so every subproblem is feasible):
+Its variables are ``z = [d, y, s_o, s_g, t_+, t_-, s_c]``: the step ``d`` from the iterate ``x``, the lifted
+residuals ``y`` (linearized :math:`r`), and nonnegative slacks on the output constraints, the linearized inequalities,
+either side of the linearized equalities and on each second-order cone (an exact l1 penalty, so every subproblem is
+feasible):
 
 .. math::
 
@@ -15,10 +16,7 @@ linearized equalities and on each second-order cone (an exact l1 penalty, so eve
     \\quad |d_i| \\le \\Delta\\,\\sigma_i
 
 with :math:`\\Delta` the trust radius, :math:`\\sigma` the variable scale and :math:`v = Fx + f` each cone's affine map
-(:class:`~convexguid.scp.problem.ConeBlock`, exact); the backend sees the scaled step :math:`d_i/\\sigma_i`. Each
-linearized equality is one row of the zero cone between its two slacks: written as the pair
-:math:`|e + \\nabla e\\, d| \\le t` it would put its Jacobian in the KKT system twice (the condensed form keeps that
-pair, which the dense backend reads as one absolute-value penalty; :mod:`convexguid.scp.condensed`).
+(:class:`~convexguid.scp.problem.ConeBlock`, exact); the backend sees the scaled step :math:`d_i/\\sigma_i`.
 :class:`SubproblemAssembler` maps block values straight into the CSC ``data`` arrays, so each iteration only copies
 numbers (why this form: docs/engine.md, 'Subproblem assembly: lifted and condensed').
 """
@@ -94,8 +92,7 @@ class SubproblemRows:
         self.n_cones = len(cone_sizes)
         n_a, n_g, n_o = linear.A.shape[0], linear.G.shape[0], outputs.M.shape[0]
         lifted_rows = self.m if lifted else 0
-        # lifted: each equality one zero-cone row between two slacks; condensed: a +/- pair of rows on one slack
-        self.split = lifted
+        self.split = lifted  # an equality: one zero-cone row between two slacks, or (condensed) a +/- pair
         zero_eq, pair_rows, eq_slacks = (self.n_eq, 0, 2 * self.n_eq) if lifted else (0, self.n_eq, self.n_eq)
         self.n_slack = n_o + self.n_ineq + eq_slacks + self.n_cones
         self.num_z = n + lifted_rows + self.n_slack
@@ -120,14 +117,11 @@ class SubproblemRows:
             pat.add_dense(row, 0, n_o, n)
         pat.add_diagonal(row, so0, n_o)
         row = _add_softened_rows(pat, row + n_o, first, n, (so0, sg0, t0), (self.n_ineq, pair_rows, self.n_slack))
-        _add_cone_rows(pat, row, first.cones, cone_sizes, t0 + eq_slacks)
-        if lifted:
-            row = n_a + lifted_rows
-            for block in first.equalities:
-                _add_jacobian(pat, row, block.jacobian, block.values.size, n)
-                row += block.values.size
-            pat.add_diagonal(row - self.n_eq, t0, self.n_eq)
-            pat.add_diagonal(row - self.n_eq, t0 + self.n_eq, self.n_eq)
+        _add_cone_rows(pat, row, first.cones, cone_sizes, t0 + eq_slacks, n)
+        if lifted:  # e + J_e d - t+ + t- = 0
+            _add_blocks(pat, n_a + lifted_rows, first.equalities, n)
+            pat.add_diagonal(n_a + lifted_rows, t0, self.n_eq)
+            pat.add_diagonal(n_a + lifted_rows, t0 + self.n_eq, self.n_eq)
         pat.finish()
         self._a_pattern = pat
         # the subproblem is solved for the scaled step d / scale, which keeps it well conditioned
@@ -136,8 +130,7 @@ class SubproblemRows:
         self._unit_scale = bool(np.all(scale == 1.0))  # the column scaling then changes no number
         # the fixed entries of the softened rows, the slacks' bounds and the trust region
         self._fixed = {"ineq": -np.ones(self.n_ineq), "eq": -np.ones(self.n_eq), "slack": -np.ones(self.n_slack),
-                       "box": (1.0 / scale, -1.0 / scale), "cone": -np.ones(self.n_cones),
-                       "eq_minus": np.ones(self.n_eq)}
+                       "box": (1.0 / scale, -1.0 / scale), "cone": -np.ones(self.n_cones), "eq_t-": np.ones(self.n_eq)}
 
     def constraints(self, x: np.ndarray, ev: Evaluation, radius: float | np.ndarray, head: list[np.ndarray],
                     head_rhs: list[np.ndarray]) -> tuple[sp.csc_matrix, np.ndarray]:
@@ -147,7 +140,7 @@ class SubproblemRows:
         lin, fixed = self.linear, self._fixed
         jac_e = [_jacobian_data(b.jacobian) for b in ev.equalities]
         pairs = [] if self.split else [*jac_e, fixed["eq"], *(-j for j in jac_e), fixed["eq"]]
-        split = [*jac_e, fixed["eq"], fixed["eq_minus"]] if self.split else []
+        split = [*jac_e, fixed["eq"], fixed["eq_t-"]] if self.split else []
         A = self._a_pattern.matrix([
             *head, *(_jacobian_data(b.jacobian) for b in ev.inequalities), fixed["ineq"], *pairs, fixed["slack"],
             *fixed["box"], *(-_jacobian_data(b.jacobian) for b in ev.cones), fixed["cone"], *split])
@@ -214,11 +207,9 @@ class SubproblemAssembler(SubproblemRows):
 
 @dataclass(frozen=True)
 class DualLayout:
-    """Where each constraint's rows sit in a subproblem, lifted or condensed. Zero cone: ``A`` (``linear_equalities``
-    rows), then the lifted form's ``J d - y = -r`` rows (``residuals``) and, ``split``, its linearized equalities.
-    Nonnegative cone: ``G``, the output constraints, the linearized inequalities, the condensed form's linearized
-    equalities as ``+`` and ``-`` rows (the multiplier is the ``+`` row's dual less the ``-`` row's), then slacks and
-    trust region. Second-order cones: the last ``cone_rows``."""
+    """Where each constraint's rows sit in a subproblem. Zero cone: ``A``, the lifted form's ``J d - y = -r`` rows
+    and (``split``) linearized equalities. Nonnegative cone: ``G``, outputs, linearized inequalities, the condensed
+    form's equalities as ``+`` and ``-`` rows (multiplier: their difference), slacks, trust region; then the cones."""
 
     linear_equalities: int
     residuals: int
@@ -242,21 +233,15 @@ class DualLayout:
 
 def _add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
                       counts: tuple[int, int, int]) -> int:
-    """The rows after the output constraints: the linearized inequalities with their slacks, the linearized
-    equalities twice (``+`` and ``-``) with theirs when paired here (``counts[1]`` rows, else none), the
-    nonnegativity of every slack, and the trust region on the step's ``n`` columns. ``starts`` are the first columns
-    of the output, inequality and equality slacks; ``counts`` the numbers of inequality rows, paired equality rows and
-    slacks. Returns the next row."""
+    """The rows after the outputs: linearized inequalities and their slacks, paired equalities (``+``, ``-``) and
+    theirs, every slack's bound, the trust region on the step. ``starts``: the first output, inequality and equality
+    slack columns; ``counts``: inequality rows, paired equality rows, slacks. Returns the next row."""
     so0, sg0, t0 = starts
     n_ineq, n_eq, n_slack = counts
-    for block in first.inequalities:
-        _add_jacobian(pat, row, block.jacobian, block.values.size, n)
-        row += block.values.size
+    row = _add_blocks(pat, row, first.inequalities, n)
     pat.add_diagonal(row - n_ineq, sg0, n_ineq)
     for _ in range(2 if n_eq else 0):
-        for block in first.equalities:
-            _add_jacobian(pat, row, block.jacobian, block.values.size, n)
-            row += block.values.size
+        row = _add_blocks(pat, row, first.equalities, n)
         pat.add_diagonal(row - n_eq, t0, n_eq)
     pat.add_diagonal(row, so0, n_slack)
     row += n_slack
@@ -265,12 +250,10 @@ def _add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, start
     return row + 2 * n
 
 
-def _add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...], slack0: int) -> None:
+def _add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...], slack0: int, n: int) -> None:
     """The second-order cones' rows from ``row`` on: each cone's map :math:`v + F d`, its slack (columns from
     ``slack0``, one a cone) on its first row."""
-    for block in cones:
-        pat.add_sparse(row, 0, block.jacobian)
-        row += block.values.size
+    row = _add_blocks(pat, row, cones, n)
     firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int) if sizes else np.zeros(0, int)
     pat.add_entries(row - sum(sizes) + firsts, slack0 + np.arange(len(sizes)))
 
@@ -281,6 +264,14 @@ def csc_index_arrays(indices: np.ndarray, indptr: np.ndarray, shape: tuple[int, 
     fits = max(*shape, len(indices)) <= np.iinfo(np.int32).max  # scipy's rule for the (data, indices, indptr) form
     dtype = np.int32 if fits else np.int64
     return np.asarray(indices, dtype=dtype), np.asarray(indptr, dtype=dtype)
+
+
+def _add_blocks(pat: _Pattern, row: int, blocks: tuple, n: int) -> int:
+    """Each block's Jacobian from ``row`` on, one after another; returns the next row."""
+    for block in blocks:
+        _add_jacobian(pat, row, block.jacobian, block.values.size, n)
+        row += block.values.size
+    return row
 
 
 def _add_jacobian(pat: _Pattern, row0: int, jacobian: np.ndarray | sp.spmatrix | None, rows: int, n: int) -> None:

@@ -1,13 +1,10 @@
 """Which subproblem assembly and which backend an SCP run uses (``backend: auto`` and explicit names).
 
 ``auto`` decides once per run, from the program's first evaluation: the condensed subproblem
-(:mod:`convexguid.scp.condensed`) with the dense active-set solver DAQP when the program is small (at most
-:data:`~convexguid.backends.registry.DENSE_MAX_VARIABLES` variables), has residuals with weight (a Hessian for DAQP)
-and Jacobians (residuals and nonlinear constraints) with at least
-:data:`~convexguid.backends.registry.DENSE_MIN_DENSITY` nonzeros, Clarabel re-solving a DAQP answer that is not
-``optimal``; otherwise, and always with second-order cones, the lifted subproblem (:mod:`convexguid.scp.assembly`)
-with Clarabel. An explicit name keeps today's behaviour: the lifted subproblem for ``clarabel``, ``osqp`` and
-``qpsolvers:*``, the condensed one for the dense backend ``daqp``.
+(:mod:`convexguid.scp.condensed`) with DAQP for a small program (``DENSE_MAX_VARIABLES``) with weighted residuals and
+dense Jacobians (``DENSE_MIN_DENSITY``); otherwise the lifted one (:mod:`convexguid.scp.assembly`) with PIQP, or with
+Clarabel when it has second-order cones; Clarabel re-solves an answer of DAQP or PIQP that is not ``optimal``. An
+explicit name: the condensed subproblem for ``daqp``, the lifted one for any other.
 """
 
 from __future__ import annotations
