@@ -40,32 +40,21 @@ class BoundsLayout:
     rows with ``b = +inf``, which bound nothing and are left out (their multipliers are zero)."""
 
     def __init__(self, program: ConicProgram) -> None:
-        A = program.A.tocsr()
-        nz, n = program.cones.zero, A.shape[1]
-        row_len = np.diff(A.indptr)
-        singleton = row_len == 1
-        singleton[:nz] = False
-        first = A.indptr[:-1]
-        single_rows = np.flatnonzero(singleton)
-        values = A.data[first[single_rows]]
-        singleton[single_rows[values == 0]] = False  # a zero coefficient bounds nothing: kept as a row
-        self.bound_rows = np.flatnonzero(singleton)
-        self.bound_var = A.indices[first[self.bound_rows]]
-        self.upper = A.data[first[self.bound_rows]] > 0
+        A, nz = program.A, program.cones.zero
+        m, n = A.shape
+        singleton = (np.bincount(A.indices, minlength=m) == 1) & (np.arange(m) >= nz)
+        singleton[A.indices[singleton[A.indices] & (A.data == 0)]] = False  # a zero coefficient bounds nothing
+        # each bound row's one entry, by its position in A's CSC data (so by variable, then row)
+        self.bound_pos = np.flatnonzero(singleton[A.indices])
+        self.bound_rows = A.indices[self.bound_pos]
+        self.bound_var = np.repeat(np.arange(n), np.diff(A.indptr))[self.bound_pos]
+        self.upper = A.data[self.bound_pos] > 0
         self.n, self.nz = n, nz
         self.eq_rows = np.arange(nz)
         self.vacuous = np.isposinf(program.b) & ~singleton  # a row with no upper limit is left out
         self.vacuous[:nz] = False
-        self.ineq_rows = np.flatnonzero(~singleton & ~self.vacuous & (np.arange(A.shape[0]) >= nz))
-        # positions of the bound coefficients in the CSC data of A (A is canonical: one entry per row and column)
-        csc = program.A
-        col_of = np.repeat(np.arange(n), np.diff(csc.indptr))
-        key = col_of.astype(np.int64) * A.shape[0] + csc.indices
-        wanted = self.bound_var.astype(np.int64) * A.shape[0] + self.bound_rows
-        order = np.argsort(key)
-        self.bound_pos = order[np.searchsorted(key, wanted, sorter=order)]
-        self._eq = _RowBlock(csc, self.eq_rows)
-        self._ineq = _RowBlock(csc, self.ineq_rows)
+        self.ineq_rows = np.flatnonzero(~singleton & ~self.vacuous & (np.arange(m) >= nz))
+        self._eq, self._ineq = _RowBlock(A, self.eq_rows), _RowBlock(A, self.ineq_rows)
 
     def fits(self, program: ConicProgram) -> bool:
         """Whether every bound row of ``program`` still has a nonzero coefficient of its layout's sign, and the rows
