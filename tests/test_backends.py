@@ -185,7 +185,22 @@ def test_piqp_leaves_out_a_row_without_an_upper_limit(capfd):
     ref = make_backend("clarabel", program, tolerance=1e-10).solve()
     assert res.status == "optimal" and res.z[2] == 0.0
     np.testing.assert_allclose(res.x, ref.x, atol=1e-6)
-    assert "PIQP" not in capfd.readouterr().out
+    printed = capfd.readouterr()
+    assert "PIQP" not in printed.out + printed.err
+
+
+@pytest.mark.parametrize("name", ["piqp", "clarabel"])
+def test_a_limit_that_is_not_a_number_fails_the_solve(capfd, name):
+    """A row whose limit is NaN (a constraint evaluated outside its domain) is no program to solve: the backend
+    says ``failed``. PIQP alone would read the NaN as no limit, drop the row without a word that reaches the caller,
+    and call the rest optimal."""
+    program = penalized_qp(5)
+    program.b = program.b.copy()
+    program.b[2] = np.nan
+    res = make_backend(name, program, tolerance=1e-10).solve()
+    assert res.status == "failed" and not res.usable
+    printed = capfd.readouterr()
+    assert "PIQP" not in printed.out + printed.err
 
 
 def test_piqp_follows_updates_and_a_bound_whose_sign_turns():

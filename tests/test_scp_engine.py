@@ -25,7 +25,7 @@ import convexguid.scp.engine as engine
 from convexguid.backends import BackendResult, available_backends
 from convexguid.scp.engine import solve_scp
 from convexguid.scp.lagrangian import Multipliers
-from convexguid.scp.policies import PenaltyPolicy
+from convexguid.scp.policies import PenaltyPolicy, SecondOrderCorrection
 from convexguid.scp.problem import (
     ConstraintBlock,
     Evaluation,
@@ -529,3 +529,17 @@ def test_the_penalty_is_steered_up_by_a_step_that_adds_violation_or_by_steps_tha
     assert policy.steered(1.0, 0.6, 0.3, True, 2) == (False, 0)  # the new point removed most of it (the chain)
     assert policy.steered(1.0, 0.6, 0.7, False, 2) == (False, 0)  # the trust region stopped the step
     assert policy.steered(1.0, 0.6, None, True, 2) == (False, 0)  # refused
+
+
+def test_a_step_is_corrected_only_from_a_trial_point_whose_constraints_are_numbers():
+    """A trial point outside the maps' domain (a root of a negative number) evaluates to NaN; shifted by it, the
+    second-order correction's subproblem would have NaN limits. It is not tried there, and is tried at a poor ratio
+    from a trial point that evaluates."""
+    correction = SecondOrderCorrection(threshold=0.75)
+    jacobian = np.eye(2)
+    at_x = Evaluation(np.zeros(0), equalities=(ConstraintBlock("e", np.array([0.0, 0.1]), jacobian),))
+    finite = Evaluation(np.zeros(0), equalities=(ConstraintBlock("e", np.array([0.2, 0.1])),))
+    outside = Evaluation(np.zeros(0), equalities=(ConstraintBlock("e", np.array([np.nan, 0.1])),))
+    assert correction.wanted(0.1, at_x, finite)
+    assert not correction.wanted(0.1, at_x, outside)
+    assert not correction.wanted(0.9, at_x, finite)  # a good ratio needs no correction

@@ -154,6 +154,9 @@ class PiqpBackend(Backend):
 
     def solve(self) -> BackendResult:
         program = self._program
+        if not _numbers(program):
+            # PIQP reads a NaN limit as no limit and drops its row: refuse, as Clarabel does
+            return BackendResult("failed", None, float("nan"), 0, 0.0, float("nan"), float("nan"))
         start = time.perf_counter()
         parts = self._layout.split(program)
         self._solver_for(program, parts)
@@ -168,3 +171,9 @@ class PiqpBackend(Backend):
                                        np.asarray(result.z_bl), np.asarray(result.z_bu), parts[4], parts[5], parts[6])
         return BackendResult(verdict, x, float(info.primal_obj), int(info.iter), elapsed,
                              float(info.primal_res), float(info.dual_res), z)
+
+
+def _numbers(program: ConicProgram) -> bool:
+    """Whether every entry of the program is a number (a row's limit may be ``+inf``: no limit)."""
+    finite = all(np.all(np.isfinite(v)) for v in (program.P.data, program.q, program.A.data))
+    return finite and not np.any(np.isnan(program.b) | np.isneginf(program.b))

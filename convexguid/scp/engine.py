@@ -259,7 +259,7 @@ class SCPAlgorithm:
         ratio = decrease_ratio(state.merit - merit_new, predicted)
         linearized = linearized_violation(state.raw, self.outputs, d)
         predicted_objective = state.objective - (model - state.penalty * linearized)
-        if self.correction.wanted(ratio, state.raw):
+        if self.correction.wanted(ratio, state.raw, raw_new):
             corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, raw_new, d),
                                                   hessian, curved)
             if corrected.usable:

@@ -233,8 +233,13 @@ class SecondOrderCorrection:
     def from_settings(cls, s: SCPSettings) -> SecondOrderCorrection:
         return cls(s.expand_ratio, s.second_order_correction)
 
-    def wanted(self, ratio: float, ev: Evaluation) -> bool:
-        return self.enabled and ratio < self.threshold and bool(ev.equalities or ev.inequalities)
+    def wanted(self, ratio: float, ev: Evaluation, trial: Evaluation) -> bool:
+        """Whether to correct a step from the point of ``ev`` whose trial point evaluated to ``trial``: not when a
+        constraint there is not a number (the trial left the maps' domain; shifted by it, the subproblem would be
+        too)."""
+        if not (self.enabled and ratio < self.threshold and (ev.equalities or ev.inequalities)):
+            return False
+        return all(np.all(np.isfinite(block.values)) for block in (*trial.equalities, *trial.inequalities))
 
     @staticmethod
     def shifted(at_x: Evaluation, at_trial: Evaluation, d: np.ndarray) -> Evaluation:
