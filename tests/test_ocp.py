@@ -317,6 +317,31 @@ def test_a_constraint_over_part_of_the_maneuver_and_at_one_instant():
     assert solution.objective == pytest.approx(solve_with_ipopt(HermiteSimpsonProgram(p)).objective, rel=1e-6)
 
 
+@pytest.mark.parametrize("method", ["hermite-simpson", "foh", "chebyshev"])
+def test_an_equality_at_an_instant_holds_there_on_a_state_and_on_a_control(method):
+    """Rest to rest over 1 m in 1 s at minimum energy, through x = 0.6 m at half time and with the control back
+    at zero as it ends (Dymos states a cart-pole's final force so): both equalities hold on the flown plan, and the
+    cost is IPOPT's on the same transcription, above the free optimum's 12."""
+    p = double_integrator(method, intervals=20)
+    x, u = p.states[0].symbol, p.controls[0].symbol
+    p.point_equality("through_at_half_time", x - 0.6, at=0.5, unit="m")
+    p.point_equality("no_force_at_the_end", u, at=1.0, unit="m/s^2")
+    solution = p.solve()
+    assert solution.ok, solution.message
+    half = np.flatnonzero(np.isclose(solution.nodes.t, 0.5))
+    assert half.size == 1 and solution.nodes.columns["x"][half[0]] == pytest.approx(0.6, abs=1e-7)
+    assert solution.nodes.columns["u"][-1] == pytest.approx(0.0, abs=1e-7)
+    assert np.interp(0.5, solution.dense.t, solution.dense.columns["x"]) == pytest.approx(0.6, abs=1e-4)  # as flown
+    assert solution.objective > 12.0 + 1.0
+    assert solution.objective == pytest.approx(solve_with_ipopt(transcribe(p)).objective, rel=1e-6)
+
+
+def test_a_boundary_constraint_on_a_control_points_to_the_point_equality():
+    p = double_integrator()
+    with pytest.raises(SpecError, match=r"uses a control.*point_equality\(name, expression, at=1.0\)"):
+        p.boundary_constraint("no_force", p.controls[0].symbol)
+
+
 def test_a_point_constraint_off_the_grid_is_refused():
     p = double_integrator()
     p.point_constraint("halfway", p.states[0].symbol - 0.4, at=0.33)

@@ -257,7 +257,8 @@ class Problem:
         if expression.shape[1] != 1:
             raise SpecError(f"{where}: expected a column of expressions (got shape {expression.shape})")
         if ca.depends_on(expression, self.control_vector()):
-            raise SpecError(f"{where}: {expression} uses a control; state it on the states (and the final time)")
+            raise SpecError(f"{where}: {expression} uses a control; state it on the states (and the final time), or "
+                            f"as point_equality(name, expression, at={0.0 if at == 'initial' else 1.0})")
         if at == "initial" and ca.depends_on(expression, self.time):
             raise SpecError(f"{where}: {expression} uses the time at the initial instant, which is 0; leave it out")
         if name in {b[0] for b in self.boundary_constraints}:
@@ -316,6 +317,13 @@ class Problem:
         if not 0.0 <= share <= 1.0:
             raise SpecError(f"{where}: at: expected a share of the final time in [0, 1] (got {at!r})")
         self.constraints.append(PathConstraint(name, expression, unit, at=share))
+
+    def point_equality(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
+        """``expression == 0`` at the instant ``at`` (a share of the final time, on a node of the grid), e.g. a
+        control that must be zero as the maneuver ends (``at=1.0``). Linearized like the dynamics and never
+        tightened by a repair; for the states alone at either end, :meth:`boundary_constraint` says it."""
+        self.point_constraint(name, expression, at, unit)
+        self.constraints[-1] = replace(self.constraints[-1], equality=True, at_midpoints=False)
 
     def _scalar(self, where: str, name: str, expression) -> ca.SX:
         expression = ca.SX(expression)
