@@ -84,7 +84,7 @@ class PenaltyPolicy:
     maximum: float
     unit: str
     factor: float = 10.0
-    over_multipliers: float = 3.0
+    over_multipliers: float = 1.5
     slack: float = 2.0
     floor: float = 1e-3
     inactive: float = 1e-6
