@@ -33,6 +33,11 @@ class Variable:
     estimated from its rate instead (:meth:`Problem.state_scales`)."""
 
 
+def point_kind(equality: bool) -> str:
+    """The call that states a constraint at one instant, as messages name it."""
+    return "point_equality" if equality else "point_constraint"
+
+
 @dataclass(frozen=True)
 class PathConstraint:
     """``expression <= 0`` in ``unit``: over the share ``during`` of the maneuver (every node and midpoint there,

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from convexguid.errors import SolverError, SpecError
+from convexguid.ocp.declarations import point_kind
 from convexguid.ocp.parts import NumericFunction
 
 if TYPE_CHECKING:  # the transcriptions import this module
@@ -86,8 +87,8 @@ def require_point_constraints_on_nodes(problem: Problem, shares: np.ndarray, gri
     """Refuse a point constraint whose instant is not a node of the grid (it is imposed at a node only)."""
     for c in problem.constraints:
         if c.at is not None and np.min(np.abs(shares - c.at)) > 1e-9:
-            raise SpecError(f"{problem.name}: point_constraint {c.name!r}: at = {c.at:g} of the final time is not a "
-                            f"node of the {grid_name} (nodes at shares {', '.join(f'{v:.4g}' for v in shares)})")
+            raise SpecError(f"{problem.name}: {point_kind(c.equality)} {c.name!r}: at = {c.at:g} of the final time is "
+                            f"not a node of the {grid_name} (nodes at shares {', '.join(f'{v:.4g}' for v in shares)})")
 
 
 # --- the plan as flown -------------------------------------------------------------------------------------------

@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from convexguid.errors import SpecError
-from convexguid.ocp.declarations import PathConstraint, Variable, number
+from convexguid.ocp.declarations import PathConstraint, Variable, number, point_kind
 from convexguid.ocp.scaling import estimated_scales
 from convexguid.ocp.size import check_problem_size
 
@@ -311,19 +311,22 @@ class Problem:
 
     def point_constraint(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
         """``expression <= 0`` at the instant ``at`` (a share of the final time, on a node of the grid)."""
-        where = f"{self.name}: point_constraint {name!r}"
-        expression = self._scalar(where, name, expression)
-        share = number(f"{where}: at", at, allow_none=False)
-        if not 0.0 <= share <= 1.0:
-            raise SpecError(f"{where}: at: expected a share of the final time in [0, 1] (got {at!r})")
-        self.constraints.append(PathConstraint(name, expression, unit, at=share))
+        self._point(name, expression, at, unit, equality=False)
 
     def point_equality(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
         """``expression == 0`` at the instant ``at`` (a share of the final time, on a node of the grid), e.g. a
         control that must be zero as the maneuver ends (``at=1.0``). Linearized like the dynamics and never
         tightened by a repair; for the states alone at either end, :meth:`boundary_constraint` says it."""
-        self.point_constraint(name, expression, at, unit)
-        self.constraints[-1] = replace(self.constraints[-1], equality=True, at_midpoints=False)
+        self._point(name, expression, at, unit, equality=True)
+
+    def _point(self, name: str, expression: ca.SX, at: float, unit: str, equality: bool) -> None:
+        where = f"{self.name}: {point_kind(equality)} {name!r}"
+        expression = self._scalar(where, name, expression)
+        share = number(f"{where}: at", at, allow_none=False)
+        if not 0.0 <= share <= 1.0:
+            raise SpecError(f"{where}: at: expected a share of the final time in [0, 1] (got {at!r})")
+        self.constraints.append(PathConstraint(name, expression, unit, at=share, equality=equality,
+                                               at_midpoints=not equality))
 
     def _scalar(self, where: str, name: str, expression) -> ca.SX:
         expression = ca.SX(expression)
@@ -441,9 +444,9 @@ class Problem:
             # (the mapped Chebyshev grid's nodes are not equally spaced: its program checks them)
             if c.at is not None and self.method != "chebyshev" and \
                     abs(c.at * self.intervals - round(c.at * self.intervals)) > 1e-9:
-                raise SpecError(f"{self.name}: point_constraint {c.name!r}: at = {c.at:g} of the final time is not a "
-                                f"node of the {self.intervals}-interval grid; choose intervals so that at x intervals "
-                                "is a whole number")
+                raise SpecError(f"{self.name}: {point_kind(c.equality)} {c.name!r}: at = {c.at:g} of the final time "
+                                f"is not a node of the {self.intervals}-interval grid; choose intervals so that at x "
+                                "intervals is a whole number")
         known = {str(v.symbol) for v in (*self.states, *self.controls)} | {str(self.time)}
         terminal = [("minimize_terminal", self.terminal)] if self.terminal is not None else []
         if self.terminal is not None and ca.depends_on(self.terminal, self.control_vector()):
