@@ -448,3 +448,21 @@ def test_a_statement_of_the_same_graph_reuses_its_derivatives_and_another_does_n
         cache.get("square", [x], [c * x**2], lambda c=c: built.append(c) or c)
     assert built == [1.0, 2.0, 3.0, 1.0]  # the graph of 1.0 left when 3.0 came: built again
     assert cache.get("square", [x], [3.0 * x**2], lambda: "new") == 3.0
+
+
+def test_a_state_stated_with_bounds_alone_is_guessed_within_them():
+    """A state with no boundary values and no guess starts at 0 where its bounds allow it, else at the nearest
+    bound: an airspeed bounded to [10, 350] guessed at 0 would start the dynamics at a division by zero (IPOPT then
+    stops at its first evaluation)."""
+    p = Problem("guesses")
+    speed = p.state("v", bounds=(10.0, 350.0))
+    mass = p.state("m", bounds=(2.0, None))
+    angle = p.state("gamma", bounds=(-1.0, 1.0))
+    height = p.state("h", bounds=(0.0, 1000.0), initial=5.0)
+    u = p.control("u", bounds=(-1.0, 1.0))
+    p.dynamics({speed: u, mass: -u**2, angle: u / speed, height: speed * angle})
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    start, end, _ = p.straight_line()
+    assert start.tolist() == [10.0, 2.0, 0.0, 5.0]
+    assert end.tolist() == start.tolist()

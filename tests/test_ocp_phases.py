@@ -245,3 +245,30 @@ def test_a_link_broken_on_the_flown_ends_refines_the_phase_that_drifted():
     assert repaired.repair.startswith("coast: ") and "burn" not in repaired.repair
     assert solution.figures.phases["coast"]["intervals"] > 4 == solution.figures.phases["burn1"]["intervals"]
     assert solution.nodes.columns["deltav"][-1] == pytest.approx(0.3995, rel=1e-3)
+
+
+def test_a_loop_from_and_back_to_its_bound_leaves_and_lands_with_the_rate_inward():
+    """A hop that starts and ends on the ground (x >= 0, x(0) = x(T) = 0) with its speed periodic: any trajectory of
+    the stated problem leaves with v(0) >= 0 and lands with v(T) <= 0, so v(0) = v(T) = 0. The collocation holds
+    x >= 0 at the nodes only; its optimum (the cost weighs rising early) leaves and lands at the same upward speed
+    and crosses the ground between its last two nodes. The repair adds the landing's rate condition; the plan then
+    leaves and lands at rest."""
+    p = Problem("hop")
+    x = p.state("x", bounds=(0.0, None), initial=0.0, final=0.0)
+    v = p.state("v")
+    u = p.control("u", bounds=(-10.0, 10.0))
+    p.dynamics({x: v, v: u})
+    p.final_time(fixed=2.0)
+    p.minimize_integral((3 - p.time) * (x - 1) ** 2 + 0.01 * u**2)
+    p.transcription(10)
+    hop = Phases("hop", [p])
+    hop.link("v_periodic", p.end(v) - p.start(v))
+    solution = hop.solve()
+    assert solution.status == "converged", solution.message
+    first = solution.repair_rounds[0]
+    assert not first.passed and "hop.x_min" in first.worst  # the collocation's optimum crossed the ground
+    assert "x_rate_final added" in solution.repair_rounds[1].repair
+    speeds = solution.nodes.columns["v"]
+    assert abs(speeds[0]) < 1e-6 and abs(speeds[-1]) < 1e-6
+    # what the flight still crosses by at the end is its miss of the final position, within the final tolerance
+    assert solution.dense.columns["x"].min() > -1e-4

@@ -28,6 +28,7 @@ CASES = [
     ("powered descent, nonconvex", "powered_descent", "build_nonconvex", "-final mass [kg]"),
     ("two-instrument slew", "two_instrument_slew", "build", "energy [N^2 m^2 s]"),
     ("OpenSCvx's 6-DoF powered descent", "rocket_6dof_pdg", "build", "-final mass"),
+    ("Zhao's dynamic soaring", "dynamic_soaring", "build", "wind gradient [1/s]"),
 ]
 
 
@@ -82,7 +83,11 @@ def main() -> int:
              "OpenSCvx's 6-DoF powered descent (its 0.5.2 constants, 20 zero-order-hold intervals): IPOPT solves the "
              "transcription as stated, whose optimum breaks the body-rate limit between nodes; convexguid's plan is "
              "the one its dense check passed after a repair round held that limit between nodes, so its final mass "
-             "sits slightly below IPOPT's."]
+             "sits slightly below IPOPT's.",
+             "Zhao's dynamic soaring (one phase, its speed, path angle and heading periodic through links; 40 "
+             "Hermite-Simpson intervals): the 40-interval NLP has several local optima (IPOPT from GPOPS-II's "
+             "circular guess finds 0.063641, convexguid's first solve too); convexguid's verified plan is on the grid "
+             "its repair refined, with the landing's rate condition and margins on the load factor."]
     text = bench_document("convexguid.ocp examples against IPOPT on the same NLP", ["numpy", "scipy", "casadi",
                           "clarabel", "piqp"], "python -m convexguid.benches.ocp_examples", caption, table, notes)
     write_text_atomic(args.output, text)

@@ -33,6 +33,7 @@ from convexguid.ocp.mesh import (
     refined_program,
 )
 from convexguid.ocp.parts import Margins, NumericFunction
+from convexguid.ocp.pinned import broken_beside_end, net_of_final_miss, netted_bounds, with_rate_conditions
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
@@ -163,10 +164,11 @@ class DenseChecker:
     def check(self, program: Transcription, z: np.ndarray) -> Check:
         p = program.problem
         track, flight = self.flown(program, z)
-        excess = self._excess(program, track)
+        stated = self._stated_excess(program, track)
+        excess = net_of_final_miss(program, track.t, track.x, stated)
         broken = any(np.any(e > self._tolerance(p, key)) for key, e in excess.items())
         checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()), 0.0, "max")
-                  for j, c in enumerate(p.constraints)]
+                  for j, c in enumerate(p.constraints) if c.judged]
         for i, v in enumerate(p.states):
             if v.upper is not None:
                 checks.append(ConstraintCheck(f"{v.name}_max", float(track.x[:, i].max()), v.upper, "max"))
@@ -181,11 +183,25 @@ class DenseChecker:
             checks.append(ConstraintCheck("local_error", local, p.mesh_tolerance, "max"))
             tolerances["local_error"] = p.mesh_tolerance
             passed = passed and local <= p.mesh_tolerance
+        remarks = flight + netted_bounds(program, stated, excess, PATH_TOLERANCE)
         verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed, tolerances,
-                                    flight + (() if passed else jumping_controls(program, z)))
+                                    remarks + (() if passed else jumping_controls(program, z)))
         return Check(verification, track)
 
     def repair(self, program: Transcription, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
+        """Where the flight broke a state's bound beside an end where the state is stated on it, first add that
+        end's rate condition (:mod:`convexguid.ocp.pinned`: no margin moves a fixed end node); then
+        :meth:`tighten_or_refine`."""
+        ends = broken_beside_end(program, check.track.t, self._excess(program, check.track), PATH_TOLERANCE)
+        if not ends:
+            return self.tighten_or_refine(program, z, check, attempt)
+        held = with_rate_conditions(program, ends)
+        note = (f"{', '.join(e.name(program.problem) for e in ends)} added (the flight crossed a bound beside an end "
+                "where the plan sits on it: the rate there must point into the bounds)")
+        rest = self.tighten_or_refine(held, z, check, attempt)
+        return Repair(held, z, note) if rest is None else Repair(rest.program, rest.x0, f"{note}; {rest.description}")
+
+    def tighten_or_refine(self, program: Transcription, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
         """Tighten each path constraint and state bound broken between nodes on the intervals where it broke: at
         their two nodes and midpoint, by the worst excess there (grown each round, never at a node whose values
         are all fixed: there nothing can move). With nothing broken between nodes (a final-state error), when the
@@ -301,6 +317,12 @@ class DenseChecker:
 
     @staticmethod
     def _excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:
+        """:meth:`_stated_excess`, with a bound a state is stated on at the final end judged on the last interval
+        net of the flight's miss of that final value (:func:`~convexguid.ocp.pinned.net_of_final_miss`)."""
+        return net_of_final_miss(program, track.t, track.x, DenseChecker._stated_excess(program, track))
+
+    @staticmethod
+    def _stated_excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:
         """Each path constraint's and state bound's excess on the dense grid, by ``("path", j)`` or
         ``("bound", (state, is_upper))``; a constraint imposed over part of the maneuver (or at one node) is
         ``-inf`` on the samples outside it."""
@@ -316,7 +338,7 @@ class DenseChecker:
                 inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None
                           else (share >= c.during[0] - 1e-12) & (share <= c.during[1] + 1e-12))
                 excess = np.abs(values[:, j]) / magnitude[j] if c.equality else values[:, j]
-                out[("path", j)] = np.where(inside, excess, -np.inf)
+                out[("path", j)] = np.where(inside & c.judged, excess, -np.inf)
         for i, v in enumerate(p.states):
             if v.upper is not None:
                 out[("bound", (i, True))] = track.x[:, i] - v.upper

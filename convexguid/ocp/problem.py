@@ -464,10 +464,10 @@ class Problem:
 
     def straight_line(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The straight-line guess: each state's first and last value (its initial and final ones, the other given
-        one where only one is, else its guess or 0) and each control's value (its guess, else the middle of finite
-        bounds, else 0)."""
-        start = np.array([v.initial if v.initial is not None else v.final if v.final is not None else (v.guess or 0.0)
-                          for v in self.states])
+        one where only one is, else its guess, else 0 or its bound nearest to 0) and each control's value (its
+        guess, else the middle of finite bounds, else 0)."""
+        start = np.array([v.initial if v.initial is not None else v.final if v.final is not None else
+                          v.guess if v.guess is not None else v.fallback_guess() for v in self.states])
         end = np.array([v.final if v.final is not None else start[i] for i, v in enumerate(self.states)])
         control = np.array([v.guess if v.guess is not None else 0.5 * (v.lower + v.upper)
                             if v.lower is not None and v.upper is not None else 0.0 for v in self.controls])
@@ -502,3 +502,4 @@ class Problem:
         low = np.array([-np.inf if v.lower is None else v.lower for v in variables])
         high = np.array([np.inf if v.upper is None else v.upper for v in variables])
         return low, high
+
