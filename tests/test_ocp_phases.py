@@ -247,7 +247,8 @@ def test_a_link_broken_on_the_flown_ends_refines_the_phase_that_drifted():
     assert solution.nodes.columns["deltav"][-1] == pytest.approx(0.3995, rel=1e-3)
 
 
-def test_a_loop_from_and_back_to_its_bound_leaves_and_lands_with_the_rate_inward():
+@pytest.mark.parametrize("method", ["hermite-simpson", "foh", "chebyshev"])
+def test_a_loop_from_and_back_to_its_bound_leaves_and_lands_with_the_rate_inward(method):
     """A hop that starts and ends on the ground (x >= 0, x(0) = x(T) = 0) with its speed periodic: any trajectory of
     the stated problem leaves with v(0) >= 0 and lands with v(T) <= 0, so v(0) = v(T) = 0. The collocation holds
     x >= 0 at the nodes only; its optimum (the cost weighs rising early) leaves and lands at the same upward speed
@@ -260,7 +261,7 @@ def test_a_loop_from_and_back_to_its_bound_leaves_and_lands_with_the_rate_inward
     p.dynamics({x: v, v: u})
     p.final_time(fixed=2.0)
     p.minimize_integral((3 - p.time) * (x - 1) ** 2 + 0.01 * u**2)
-    p.transcription(10)
+    p.transcription(10, method)
     hop = Phases("hop", [p])
     hop.link("v_periodic", p.end(v) - p.start(v))
     solution = hop.solve()
