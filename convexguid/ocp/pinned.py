@@ -15,8 +15,8 @@ Such a state touches its bound at that end, and two things follow that the nodes
 
 Measured on Zhao's dynamic soaring (Optimal Control Applications and Methods 25, 2004; the GPOPS-II statement, 40
 Hermite-Simpson intervals, a straight-line guess): the plan landed with ``h' = +2.3 ft/s`` and crossed ``h >= 0``
-by 3.7 ft between its last two nodes; six rounds of margins left 0.034 ft, and the flight's own final miss was
-0.002 ft.
+by 3.7 ft between its last two nodes; six rounds of margins left 0.034 ft (the airspeed then guessed at 0), and
+the flight's own final miss was 0.002 ft.
 """
 
 from __future__ import annotations
