@@ -192,16 +192,19 @@ class DenseChecker:
         """Where the flight broke a state's bound beside an end where the state is stated on it, first add that
         end's rate condition (:mod:`convexguid.ocp.pinned`: no margin moves a fixed end node); then
         :meth:`tighten_or_refine`."""
-        ends = broken_beside_end(program, check.track.t, self._excess(program, check.track), PATH_TOLERANCE)
+        excess = self._excess(program, check.track)
+        ends = broken_beside_end(program, check.track.t, excess, PATH_TOLERANCE)
         if not ends:
-            return self.tighten_or_refine(program, z, check, attempt)
+            return self.tighten_or_refine(program, z, check, attempt, excess)
         held = with_rate_conditions(program, ends)
         note = (f"{', '.join(e.name(program.problem) for e in ends)} added (the flight crossed a bound beside an end "
                 "where the plan sits on it: the rate there must point into the bounds)")
-        rest = self.tighten_or_refine(held, z, check, attempt)
+        # the conditions added are not judged densely: the excess of the program before them is the held one's
+        rest = self.tighten_or_refine(held, z, check, attempt, excess)
         return Repair(held, z, note) if rest is None else Repair(rest.program, rest.x0, f"{note}; {rest.description}")
 
-    def tighten_or_refine(self, program: Transcription, z: np.ndarray, check: Check, attempt: int) -> Repair | None:
+    def tighten_or_refine(self, program: Transcription, z: np.ndarray, check: Check, attempt: int,
+                          excess_by_name: dict[tuple, np.ndarray]) -> Repair | None:
         """Tighten each path constraint and state bound broken between nodes on the intervals where it broke: at
         their two nodes and midpoint, by the worst excess there (grown each round, never at a node whose values
         are all fixed: there nothing can move). With nothing broken between nodes (a final-state error), when the
@@ -209,7 +212,6 @@ class DenseChecker:
         is refined instead (:meth:`refine`; None past :data:`MAX_INTERVALS`: the plan is ``unverified`` at once
         instead of after the whole repair budget)."""
         p, track = program.problem, check.track
-        excess_by_name = self._excess(program, track)
         worst_now = max((float(e.max()) for key, e in excess_by_name.items()
                          if self._tolerance(p, key) == PATH_TOLERANCE), default=0.0)
         if (worst_now <= PATH_TOLERANCE or worst_now >= 0.9 * program.margins.violation

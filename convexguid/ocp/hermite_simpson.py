@@ -240,6 +240,13 @@ class HermiteSimpsonProgram(Transcription):
         values = controls if self.linear_control else np.vstack([controls, *mids])
         return fine, fine.assemble(states, values, tf)
 
+    def restated(self, problem) -> HermiteSimpsonProgram:
+        """Another statement of the problem on this grid, uneven after a refinement, remembering what each interval
+        was split from; margins afresh."""
+        program = HermiteSimpsonProgram(problem, grid=self.uneven_shares, intervals=self.N)
+        program.split_from = self.split_from
+        return program
+
     def with_linear_control(self, z: np.ndarray, carry: bool = True) -> tuple[HermiteSimpsonProgram, np.ndarray]:
         """The same grid with each control linear between its node values (``control="linear"``: the midpoint
         values tied to the nodes' mean), margins afresh: the regularization of an optimum that chatters between node
@@ -247,8 +254,7 @@ class HermiteSimpsonProgram(Transcription):
         ``carry``, else its own first guess."""
         problem = copy.copy(self.problem)
         problem.control_interpolation = "linear"
-        linear = HermiteSimpsonProgram(problem, grid=self.uneven_shares, intervals=self.N)
-        linear.split_from = self.split_from
+        linear = self.restated(problem)
         if not carry:
             return linear, linear.initial_guess()
         z = self.unwrapped(z)

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from convexguid.ocp.declarations import PathConstraint
-from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.parts import Margins
 from convexguid.ocp.transcription import Transcription
 
@@ -97,11 +96,7 @@ def with_rate_conditions(program: Transcription, ends: list[PinnedEnd]) -> Trans
         added.append(PathConstraint(end.name(problem), inward * rates[end.state], f"{unit}/s" if unit else "",
                                     at=1.0 if end.final else 0.0, at_midpoints=False, judged=False))
     problem.constraints = [*problem.constraints, *added]
-    if isinstance(program, HermiteSimpsonProgram):
-        fresh = HermiteSimpsonProgram(problem, grid=program.uneven_shares, intervals=program.N)
-        fresh.split_from = program.split_from
-    else:
-        fresh = type(program)(problem, intervals=program.N)
+    fresh = program.restated(problem)
     old = dict(zip(program.path_rows, program.margins.path, strict=True))
     path = np.array([old.get(row, 0.0) for row in fresh.path_rows])
     return fresh.with_margins(Margins(path, program.margins.bounds, program.margins.violation, program.margins.cone))

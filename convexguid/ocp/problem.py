@@ -502,4 +502,3 @@ class Problem:
         low = np.array([-np.inf if v.lower is None else v.lower for v in variables])
         high = np.array([np.inf if v.upper is None else v.upper for v in variables])
         return low, high
-

@@ -160,6 +160,11 @@ class Transcription:
         return np.linspace(0.0, 1.0, self.N + 1)
 
     # --- layout ---------------------------------------------------------------------------------------------
+    def restated(self, problem: Problem) -> Transcription:
+        """Another statement of the problem (a constraint added, the controls held otherwise) on this grid, margins
+        afresh."""
+        return type(self)(problem, intervals=self.N)
+
     def with_margins(self, margins: Margins) -> Transcription:
         """The same program with other repair margins. Margins enter only as numbers (added to the path values, the
         cones and the state bounds at evaluation), so the symbolic build, its derivatives and the Hessian are
