@@ -18,7 +18,7 @@ from convexguid.ocp import Problem
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
 from convexguid.scp.check_repair import Check, Repair, solve_verified
-from convexguid.scp.policies import FunnelPolicy, TrustRegionPolicy
+from convexguid.scp.policies import Funnel, FunnelPolicy, PenaltyPolicy, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, SCPSettings
 from convexguid.verification import Verification
 
@@ -198,6 +198,34 @@ def test_the_funnel_refuses_a_step_back_to_a_point_its_h_step_left():
     # a step that lowers the objective below that point's is taken
     accepted, ratio, _ = policy.decide(funnel, True, 0.31, low, high, f_low, f_low - (f_high - 0.01), 2.9e-2, 1e-7)
     assert accepted and ratio == 0.31
+
+
+def test_the_funnel_refuses_a_step_back_to_a_point_a_merit_step_left():
+    """The other way round (Betts' underwater vehicle with one state's scale stated at 0.5, 300 iterations of a
+    2-cycle): the merit takes a step to less violation at a higher objective, and the funnel took the f-step back to
+    where it started, inside its width of 8.86. The point the merit step left is now a filter entry."""
+    policy = FunnelPolicy()
+    funnel = Funnel(8.86)
+    # its model had the objective falling (an f-step to the funnel, which then takes no h-step and keeps its width)
+    accepted, ratio, funnel = policy.decide(funnel, True, 0.878, 2.229, 0.02349, 237.743, 237.743 - 818.285, 10.0,
+                                            2.229)
+    assert accepted and ratio == 0.878 and funnel.left == ((2.229, 237.743),) and funnel.width == 8.86
+    # the merit refuses the step back (ratio -8.31); as an f-step it is inside the width and drops the objective as
+    # predicted, but it returns to the point left
+    accepted, ratio, after = policy.decide(funnel, False, -8.31, 0.02349, 2.229, 818.285, 818.285 - 237.757, 600.0,
+                                           0.02349)
+    assert not accepted and ratio <= 0 and after == funnel
+    # a merit step that lowers the violation and the objective leaves no entry
+    assert policy.decide(Funnel(8.86), True, 0.9, 2.229, 0.02349, 237.743, 1.0, 1.0, 2.229)[2].left == ()
+
+
+def test_the_penalty_is_steered_up_when_the_region_allowed_far_more_feasibility_than_the_step_took():
+    """As in dynamic soaring's stall (docs/engine.md, 'Penalty weight'): a step on the trust region's boundary keeps
+    nearly all of a violation of 0.07, of which the feasibility step in the same region removes 3.4%."""
+    policy = PenaltyPolicy(1.0, 1e6, "absolute")
+    assert policy.short_of_feasibility(6.986e-2, 6.980e-2, 6.750e-2)
+    assert not policy.short_of_feasibility(6.986e-2, 6.800e-2, 6.750e-2)  # the step took most of what it could
+    assert not policy.short_of_feasibility(6.986e-2, 6.985e-2, 6.9859e-2)  # nothing to take: an infeasible valley
 
 
 def test_the_steps_keep_short_of_a_guarded_bound_until_nearly_on_it():

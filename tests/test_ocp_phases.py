@@ -94,6 +94,29 @@ def test_goddard_rocket_in_three_phases_reaches_betts_altitude():
     assert solution.nodes.columns["h"][-1] == pytest.approx(module.PUBLISHED, rel=1e-3)
 
 
+def test_dymos_cannonball_from_its_own_guess_reaches_the_published_range():
+    """Two phases with a design parameter (the ball's radius) and no size stated for any state: the speed is scaled
+    by its guessed 150-200 m/s (scaled by 1, the iterates ran off to a range of 268978 m)."""
+    module = _example("cannonball")
+    flight = module.build()
+    assert flight.phases[0].state_scales()[:4] == pytest.approx([100.0, 100.0, 200.0, 1.0])
+    solution = flight.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert solution.nodes.columns["r"][-1] == pytest.approx(module.PUBLISHED, rel=1e-3)
+
+
+def test_a_guess_where_the_dynamics_are_not_a_number_ends_at_once_saying_so():
+    """The cannonball's straight line between its stated ends starts at a speed of 0, where gam' = -g cos(gam)/v is
+    0/0: the run stops before any subproblem, naming the blocks, and returns a plan that says so."""
+    module = _example("cannonball")
+    flight = module.build()
+    for phase in flight.phases:
+        phase.guess_nodes = None
+    solution = flight.solve()
+    assert solution.status == "solver_error" and solution.iterations == 0
+    assert "not a number at the start point, in ascent: dynamics_defects" in solution.message
+
+
 def test_a_statement_in_phases_is_refused_with_one_line():
     first, _ = _leg("a", start=0.0)
     second, _ = _leg("b", end=1.0)

@@ -106,10 +106,11 @@ class DenseChecker:
         u = self.control(program, z)
         node_times = program.final_time(z) * program.node_shares()
         state = program.states(z)[0].copy()
+        names = tuple(v.name for v in program.problem.states)
         times, states = [], []
         for k in range(program.N):
             grid = np.linspace(node_times[k], node_times[k + 1], self.points + 1)
-            run = fly(rate, u, (grid[0], grid[-1]), state, t_eval=grid, atol=1e-12)
+            run = fly(rate, u, (grid[0], grid[-1]), state, names, t_eval=grid, atol=1e-12)
             keep = slice(None) if k == 0 else slice(1, None)
             times.append(run.t[keep])
             states.append(run.y.T[keep])

@@ -37,7 +37,7 @@ class Variable:
         """A state's guess when nothing stated gives one: 0, or the nearest bound where its bounds exclude 0 (an
         airspeed bounded to [10, 350] ft/s guessed at 0 starts the dynamics at a division by zero). The middle of
         the bounds (180 ft/s) was tried on Zhao's dynamic soaring: from it the SCP ended ``max_iterations`` on 30
-        and 40 intervals, from the nearest bound it converges on 30, 40 and 50."""
+        and 40 intervals; from the nearest bound it converges on 30 and 40 (docs/ocp.md, dynamic soaring)."""
         return float(np.clip(0.0, -np.inf if self.lower is None else self.lower,
                              np.inf if self.upper is None else self.upper))
 

@@ -101,14 +101,18 @@ def held_control(program: Transcription, z: np.ndarray):
     return lambda t: np.clip(planned(t), low, high)
 
 
+class _NotANumber(Exception):
+    """A rate that is not a number: ``(t, indices of the states)``."""
+
+
 class _TooManyEvaluations(Exception):
     pass
 
 
-def fly(rate, control, span: tuple[float, float], start: np.ndarray, **options):
+def fly(rate, control, span: tuple[float, float], start: np.ndarray, names: tuple[str, ...] = (), **options):
     """SciPy's DOP853 (rtol 1e-10) flight of :math:`x' = f(x, u(t), t)` (``rate``, ``control``) over ``span`` from
     ``start`` (``options``: ``t_eval``, ``atol``, ``dense_output``); :class:`~convexguid.errors.SolverError` past
-    :data:`MAX_RATE_EVALUATIONS`."""
+    :data:`MAX_RATE_EVALUATIONS`, or where a rate is not a number (naming the state from ``names``)."""
     count = 0
 
     def counted(t, x):
@@ -116,7 +120,10 @@ def fly(rate, control, span: tuple[float, float], start: np.ndarray, **options):
         count += 1
         if count > MAX_RATE_EVALUATIONS:
             raise _TooManyEvaluations
-        return rate(x, control(t), t)
+        value = rate(x, control(t), t)
+        if not np.all(np.isfinite(value)):
+            raise _NotANumber(t, np.flatnonzero(~np.isfinite(value)))
+        return value
 
     try:
         return solve_ivp(counted, span, start, method="DOP853", rtol=1e-10, **options)
@@ -124,6 +131,11 @@ def fly(rate, control, span: tuple[float, float], start: np.ndarray, **options):
         raise SolverError(f"the plan could not be flown from t = {span[0]:.6g} to {span[1]:.6g}: more than "
                           f"{MAX_RATE_EVALUATIONS} evaluations of the dynamics (stiff or blowing up along the "
                           "plan)") from None
+    except _NotANumber as nan:
+        t, rows = nan.args
+        which = ", ".join(names[i] if i < len(names) else f"#{i}" for i in rows)
+        raise SolverError(f"the plan could not be flown past t = {t:.6g}: the rate of {which} is not a number there "
+                          "(a division by zero?)") from None
 
 
 def interval_flows(program: Transcription, z: np.ndarray, control=None) -> list:
@@ -132,7 +144,8 @@ def interval_flows(program: Transcription, z: np.ndarray, control=None) -> list:
     u = held_control(program, z) if control is None else control
     rate, scales = NumericFunction(program.rate), program.state_scales
     states, times = program.states(z), program.final_time(z) * program.node_shares()
-    return [fly(rate, u, (times[k], times[k + 1]), states[k], atol=1e-12 * scales, dense_output=True)
+    names = tuple(v.name for v in program.problem.states)
+    return [fly(rate, u, (times[k], times[k + 1]), states[k], names, atol=1e-12 * scales, dense_output=True)
             for k in range(program.N)]
 
 

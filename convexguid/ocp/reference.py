@@ -48,13 +48,40 @@ def solve_with_ipopt(program: Transcription, z0: np.ndarray | None = None, tol: 
     g = ca.vertcat(*(b[0] for b in blocks))
     lbg = np.concatenate([np.full(b[0].shape[0], b[1]) for b in blocks])
     ubg = np.concatenate([np.full(b[0].shape[0], b[2]) for b in blocks])
+    g, lbg, ubg, lbx, ubx = variable_bounds(z, g, lbg, ubg)
     solver = ca.nlpsol("ipopt", "ipopt", {"x": z, "f": objective, "g": g},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tol,
                         "ipopt.constr_viol_tol": 1e-9})
     setup_s = time.perf_counter() - started
     started = time.perf_counter()
-    result = solver(x0=program.initial_guess() if z0 is None else z0, lbg=lbg, ubg=ubg)
+    result = solver(x0=program.initial_guess() if z0 is None else z0, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx)
     solve_s = time.perf_counter() - started
     stats = solver.stats()
     return IpoptAnswer(bool(stats["success"]), float(result["f"]), np.asarray(result["x"]).ravel(),
                        str(stats["return_status"]), setup_s, solve_s, int(stats.get("iter_count", 0)))
+
+
+def variable_bounds(z: ca.SX, g: ca.SX, lbg: np.ndarray, ubg: np.ndarray):
+    """``(g, lbg, ubg, lbx, ubx)``: the rows of ``lbg <= g(z) <= ubg`` that are a constant times one variable plus a
+    constant (a state's bounds, its stated boundary values) taken out as bounds on that variable, which IPOPT keeps
+    its iterates within (it may leave a constraint row's bounds until it converges, and the dynamics then meet
+    states the statement excludes: a negative radius, a speed of zero)."""
+    n = z.shape[0]
+    jacobian = ca.jacobian(g, z)
+    rows, cols = (np.asarray(a, dtype=int) for a in jacobian.sparsity().get_triplet())
+    single = np.bincount(rows, minlength=g.shape[0]) == 1
+    slope_at = ca.Function("slope", [z], [jacobian])(np.zeros(n)).sparse()
+    offset = np.asarray(ca.Function("offset", [z], [g])(np.zeros(n)), dtype=float).ravel()
+    lbx, ubx = np.full(n, -np.inf), np.full(n, np.inf)
+    taken = np.zeros(g.shape[0], dtype=bool)
+    for row, col in zip(rows, cols, strict=True):
+        if not single[row] or ca.depends_on(jacobian[int(row), int(col)], z):
+            continue
+        slope = float(slope_at[row, col])
+        if slope == 0.0:
+            continue
+        low, high = sorted(((lbg[row] - offset[row]) / slope, (ubg[row] - offset[row]) / slope))
+        lbx[col], ubx[col] = max(lbx[col], low), min(ubx[col], high)
+        taken[row] = True
+    kept = np.flatnonzero(~taken)
+    return g[kept.tolist()], lbg[kept], ubg[kept], lbx, ubx

@@ -105,6 +105,7 @@ class SCPAlgorithm:
         self.assembler: SubproblemAssembler | CondensedAssembler | None = None
         self.choice: SubproblemChoice | None = None
         self.backend: Backend | None = None
+        self.feasibility_backend: Backend | None = None  # the least violation in the step's region
         self.objective_at_start = self.objective_size = 0.0
 
     def _evaluate(self, state: IterationState | None, x: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
@@ -146,6 +147,10 @@ class SCPAlgorithm:
                                if self.settings.funnel else None)
         if infeasible:
             state.finish("infeasible", "certificate: " + restored.certificate)
+        elif broken := not_finite(raw):
+            state.finish("solver_error", f"the problem is not a number at the start point, in {broken}: a division by "
+                                         "zero or a root of a negative number there? Start such a state away from it "
+                                         "(a bound, a guess)")
         if self.assembler is None:
             # the assembly and the backend, decided once from the first evaluation (backend: auto)
             self.choice = choose_subproblem(self.settings.backend, self.program.num_variables, raw, self.weights)
@@ -282,7 +287,7 @@ class SCPAlgorithm:
                 self._take_newton(state, newton, result)
                 return self._check_limit(state)
         accepted, ratio, state.funnel = self.judged(state, ratio, x_new, ev_new, predicted_objective, linearized)
-        steer = self._penalty_too_low(state, step, linearized, accepted, ev_new)
+        steer = self._penalty_too_low(state, step, linearized, accepted, ev_new, hessian)
         if accepted:
             state.x, state.merit = x_new, merit_new
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
@@ -306,17 +311,31 @@ class SCPAlgorithm:
         return self._check_limit(state)
 
     def _penalty_too_low(self, state: IterationState, step: float, linearized: float, accepted: bool,
-                         ev_new: Evaluation) -> bool:
+                         ev_new: Evaluation, hessian: np.ndarray | None) -> bool:
         """Whether the step shows the weight below the multipliers (:meth:`PenaltyPolicy.steered
         <convexguid.scp.policies.PenaltyPolicy.steered>`), away from feasibility (above :data:`NEARLY_FEASIBLE`
         tolerances) and outside phase 1."""
         if self.phase1 or max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance:
             state.kept = 0
             return False
-        steer, state.kept = self.penalty.steered(penalty_sum(state.ev), linearized,
-                                                 penalty_sum(ev_new) if accepted else None,
-                                                 step < PINNED * state.radius, state.kept)
+        violation, inside = penalty_sum(state.ev), step < PINNED * state.radius
+        steer, state.kept = self.penalty.steered(violation, linearized, penalty_sum(ev_new) if accepted else None,
+                                                 inside, state.kept)
+        if not steer and not inside and linearized > self.penalty.retained * violation:
+            # a step held by the region that kept the violation: was that the region, or the weight?
+            steer = self.penalty.short_of_feasibility(violation, linearized, self._least_violation(state, hessian))
         return steer
+
+    def _least_violation(self, state: IterationState, hessian: np.ndarray | None) -> float:
+        """The linearized violation after the step that removes the most of it in the same trust region: the
+        subproblem with the weight at its ceiling, solved by a backend of its own (so the step's warm start stays)."""
+        ceiling = self.penalty.maximum * self.penalty.scale(self.objective_size)
+        program_k = self.assembler.build(state.x, state.raw, self.box(state), ceiling, hessian)
+        self.feasibility_backend, result, _ = self.solved(state, program_k, self.feasibility_backend,
+                                                           self.choice.backend, like=self.backend)
+        if not result.usable:
+            return penalty_sum(state.ev)
+        return linearized_violation(state.raw, self.outputs, self.assembler.step(result.x))
 
     def _raise_penalty(self, state: IterationState) -> bool:
         """Raise the penalty weight by its factor (False at its maximum); the merit and the radius follow."""

@@ -93,6 +93,11 @@ class PenaltyPolicy:
     trust region keeps, that shows the weight too low (:meth:`steered`)."""
     persistence: int = 3
     """Accepted steps in a row inside the trust region that keep the violation before the weight is raised."""
+    steering: float = 0.1
+    """The share of the best decrease of the linearized violation in the region below which a step held by the region
+    shows the weight too low (:meth:`short_of_feasibility`)."""
+    steering_floor: float = 1e-3
+    """The share of the violation the best step must remove for the comparison to count."""
 
     @classmethod
     def from_settings(cls, s: SCPSettings) -> PenaltyPolicy:
@@ -139,6 +144,13 @@ class PenaltyPolicy:
                  and violation_new > self.retained * violation)
         kept = kept + 1 if keeps else 0
         return linearized > (1 + self.retained) * violation or kept >= self.persistence, kept
+
+    def short_of_feasibility(self, violation: float, linearized: float, least: float) -> bool:
+        """Whether a step removed less than :attr:`steering` of the linearized ``violation`` that the step removing
+        the most of it in the same trust region removes (to ``least``): the weight, not the region, held it back
+        (Byrd, Nocedal & Waltz 2008, steering rule's first condition; docs/engine.md, 'Penalty weight')."""
+        return violation - least > self.steering_floor * violation and \
+            violation - linearized < self.steering * (violation - least)
 
     def escalated(self, rho: float, objective_size: float) -> float | None:
         """The next weight, or ``None`` if ``rho`` is already at the maximum."""
@@ -212,9 +224,13 @@ class FunnelPolicy:
         accepted = merit_accepts or kind is not None
         if not accepted or funnel.returns_to(violation_new, objective - objective_drop, self.filter_margin):
             return False, min(merit_ratio, 0.0), funnel
-        if kind == "h" and violation_new < violation:
-            left = funnel.left if merit_accepts else funnel.left + ((violation, objective),)
-            funnel = Funnel(self.narrowed(funnel.width, violation, violation_new), left)
+        if violation_new < violation:
+            # a point left for less violation at a higher objective is not to be come back to, whatever accepted the
+            # step: an f-step back to one a merit step had left made a pair of steps cycle (docs/engine.md, 'Funnel')
+            if objective_drop < 0 or (kind == "h" and not merit_accepts):
+                funnel = Funnel(funnel.width, funnel.left + ((violation, objective),))
+            if kind == "h":
+                funnel = Funnel(self.narrowed(funnel.width, violation, violation_new), funnel.left)
         return True, (merit_ratio if merit_accepts else ratio), funnel
 
 
