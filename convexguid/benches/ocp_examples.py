@@ -78,8 +78,9 @@ def main() -> int:
              "relaxes: compare its IPOPT final mass with exp(-objective) of the LCvx row. The SCP solves the "
              "nonconvex statement too (its thrust cones kept exact in the curved subproblem of the end game), but "
              "the lossless convexification is how an SCP should state that problem: one convex program.",
-             "IPOPT's starts are the examples' own (straight lines, control guesses); on Betts' slew it stops at an "
-             "acceptable level far above the published 28.6304 s from there, where the SCP reaches it.",
+             "IPOPT's starts are the examples' own (straight lines, control guesses), and the transcription's "
+             "variable bounds are its own bounds on the variables; on Betts' slew it does not reach the published "
+             "28.6304 s from there (its status above), where the SCP does.",
              "OpenSCvx's 6-DoF powered descent (its 0.5.2 constants, 20 zero-order-hold intervals): IPOPT solves the "
              "transcription as stated, whose optimum breaks the body-rate limit between nodes; convexguid's plan is "
              "the one its dense check passed after a repair round held that limit between nodes, so its final mass "

@@ -36,6 +36,10 @@ FOLDER = Path(__file__).resolve().parents[2] / "examples" / "classics"
 
 OUTPUT = Path(__file__).resolve().parents[2] / "validation" / "CLASSICS.md"
 
+IPOPT_SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+"""IPOPT's statuses of a solved NLP: the iteration ratios count only these (a failed run's count is where it
+stopped)."""
+
 AGREEMENT = 1e-3
 """A figure within this share of the published one matches it."""
 
@@ -135,11 +139,15 @@ def document(rows: list[Row], command: str) -> str:
                           ["---", "---", "---:", "---", "---", "---:", "---:", "---:", "---:", "---:", "---",
                            "---:", "---:", "---:", "---:"], body)
     matched = sum(r.matches for r in rows)
-    ratios = [r.iterations / r.ipopt_iterations for r in rows if r.ipopt_iterations > 0]
+    solved = [r for r in rows if r.ipopt_status in IPOPT_SOLVED and r.ipopt_iterations > 0]
+    ratios = [r.iterations / r.ipopt_iterations for r in solved]
+    unsolved = [f"{r.name} ({r.ipopt_status})" for r in rows if r not in solved]
     summary = [f"{matched} of {len(rows)} problems converged, verified and within {AGREEMENT:.1%} of the published "
                f"figure.",
                f"SCP iterations against IPOPT's: median ratio {statistics.median(ratios):.2f}, largest "
-               f"{max(ratios):.2f} (over {len(ratios)} problems)." if ratios else "No IPOPT iteration counts."]
+               f"{max(ratios):.2f} (over the {len(ratios)} problems IPOPT solved"
+               + (f"; not {', '.join(unsolved)}" if unsolved else "") + ")."
+               if ratios else "No IPOPT iteration counts."]
     caption = ("Each problem stated from its paper in `examples/classics/` with convexguid.ocp: a straight-line "
                "guess and default settings. convexguid's time runs from the statement to the verified plan "
                "(transcription and CasADi derivatives, SCP, the dense SciPy re-propagation, any repair rounds; "

@@ -9,7 +9,7 @@ control; the potential energy E and the length s are integrals, carried as state
     x(0) = a = 1, x(1) = b = 3;  E(0) = 0;  s(0) = 0, s(1) = L = 4;  minimise E(1).
 
 Published: E = 5.06852 (COPS). Stated with the default Hermite-Simpson control, quadratic through node, midpoint
-and node: the collocation then has a spurious optimum (IPOPT stops on it at E = 4.98, below the true minimum) whose
+and node: the collocation then has a spurious optimum (IPOPT stops on it at E = 4.93, below the true minimum) whose
 slope zigzags near the end where the chain is steep, and the length it integrates is not the flown one; the dense
 check catches it and the repair holds the slope linear between node values (see docs/ocp.md, "Repairs").
 Run: python examples/classics/hanging_chain.py
