@@ -40,6 +40,7 @@ from convexguid.ocp.curvature import ElementCurvature, interval_of_rows
 from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.guess import flown_free_states
 from convexguid.ocp.parts import DERIVATIVES, AffineCones, Margins, SparsityPattern, SymbolicNLP
+from convexguid.ocp.scaling import following_plan
 from convexguid.ocp.terminal import terminal_cost_is_linear, terminal_gradient, terminal_scale
 from convexguid.scp.problem import ConstraintBlock, CurvatureModel, Evaluation, LinearConstraints, OutputConstraints
 
@@ -164,6 +165,8 @@ class Transcription:
         """Another statement of the problem (a constraint added, the controls held otherwise) on this grid, margins
         afresh."""
         return type(self)(problem, intervals=self.N)
+
+    rescaled = following_plan  # (z): restated with its estimated scales grown to the plan's sizes, or None
 
     def with_margins(self, margins: Margins) -> Transcription:
         """The same program with other repair margins. Margins enter only as numbers (added to the path values, the

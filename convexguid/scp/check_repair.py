@@ -117,9 +117,16 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
                    budget: int = DEFAULT_REPAIR_BUDGET, x0: np.ndarray | None = None,
                    on_round: Callable[[RepairRound], None] | None = None) -> VerifiedSolve:
     """Solve, check densely, repair and re-solve warm until verified or ``budget`` repairs are spent."""
-    result = last = SCPAlgorithm(program, settings, log).run(x0)
-    rounds: list[RepairRound] = []
+    first = SCPAlgorithm(program, settings, log, follow_plan=True)
+    result = last = first.run(x0)
     what = "first solve"
+    if result.status == "rescaled":  # the same plan, measured in the scales its size gives (warm, as a repair)
+        program = first.rescaled
+        what = (f"first solve, restated after {result.iterations} iterations with its scales following the plan "
+                f"({getattr(program, 'scales_followed', '')})")
+        last = SCPAlgorithm(program, settings, log).run(result.x, penalty=result.penalty)
+        result = merge_results(result, last)
+    rounds: list[RepairRound] = []
     for attempt in range(budget + 1):
         report("dense check, round", attempt + 1)
         try:

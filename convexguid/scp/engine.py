@@ -64,6 +64,10 @@ NEARLY_FEASIBLE = 100.0
 """A first stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once (it may
 be the subproblem's round-off: docs/engine.md, 'Restoration and phase 1'); a later stall raises the penalty."""
 
+FOLLOW_VIOLATION = 1e-2
+"""A program that may follow its plan with its scales is restated at the first accepted iterate whose violation is
+within this (each block in its own unit, a defect in state scales): the plan's sizes then mean something."""
+
 RESTORED = 0.01
 """Phase 1 ends once the violation is within this share of the feasibility tolerance: it seeks a feasible point, not
 the violation's minimum (measured: docs/engine.md, 'Restoration and phase 1')."""
@@ -83,8 +87,11 @@ class SCPAlgorithm:
     (the certificate) instead of raising the penalty."""
 
     def __init__(self, program: NonconvexProgram, settings: SCPSettings, log: Log | None = None,
-                 phase1: bool = False) -> None:
+                 phase1: bool = False, follow_plan: bool = False) -> None:
         self.program, self.settings, self.log, self.phase1 = program, settings, log, phase1
+        self.follow_plan = follow_plan and hasattr(program, "rescaled")
+        """Whether the program may be rescaled once, at the first nearly feasible iterate (:meth:`run`)."""
+        self.rescaled: NonconvexProgram | None = None
         self.trust_region = TrustRegionPolicy.from_settings(settings)
         self.penalty = PenaltyPolicy.from_settings(settings)
         self.correction = SecondOrderCorrection.from_settings(settings)
@@ -148,9 +155,9 @@ class SCPAlgorithm:
         if infeasible:
             state.finish("infeasible", "certificate: " + restored.certificate)
         elif broken := not_finite(raw):
-            state.finish("solver_error", f"the problem is not a number at the start point, in {broken}: a division by "
-                                         "zero or a root of a negative number there? Start such a state away from it "
-                                         "(a bound, a guess)")
+            state.finish("solver_error", f"the problem or its derivatives are not a number at the start point, in "
+                                         f"{broken}: a division by zero, a root of a negative number or a norm's "
+                                         "derivative at zero there? Start such a state away from it (a bound, a guess)")
         if self.assembler is None:
             # the assembly and the backend, decided once from the first evaluation (backend: auto)
             self.choice = choose_subproblem(self.settings.backend, self.program.num_variables, raw, self.weights)
@@ -483,6 +490,15 @@ class SCPAlgorithm:
         state = self.initialize(x0, penalty)
         while not state.finished:
             self.step(state)
+            if self.follow_plan and not state.finished and state.history and state.history[-1].accepted and \
+                    max_violation(state.ev) <= FOLLOW_VIOLATION:
+                # the first nearly feasible plan shows the states' sizes: a program whose estimated scales are far
+                # from them is restated, and the caller goes on with it (docs/engine.md, 'Scales that follow the plan')
+                self.follow_plan, self.rescaled = False, self.program.rescaled(state.x)
+                if self.rescaled is not None:
+                    state.escape_log.append(f"the estimated state scales followed the plan at iteration "
+                                            f"{state.iteration}")
+                    state.finish("rescaled", "restated with the estimated state scales following the plan")
         return self.result(state)
 
 

@@ -80,8 +80,10 @@ def finish_optimal(algo: SCPAlgorithm, state: IterationState) -> None:
                 state.escape_log.append(f"stepped off a saddle (reduced-Hessian eigenvalue "
                                         f"{newton.smallest_eigenvalue:.3g}) at iteration {state.iteration}")
                 return
-            state.escape_log.append(f"negative curvature (reduced-Hessian eigenvalue {newton.smallest_eigenvalue:.3g}) "
-                                    f"at iteration {state.iteration} along which the merit rises both ways")
+            state.escape_log.append(f"the working set's reduced Hessian has a negative eigenvalue "
+                                    f"({newton.smallest_eigenvalue:.3g}) at iteration {state.iteration}, but the "
+                                    "merit rises both ways along its direction: a minimum, as far as steps from the "
+                                    "first trust radius down show")
     state.finish("converged", "; ".join(["KKT conditions met", *state.escape_log]))
 
 
