@@ -23,8 +23,9 @@ import numpy as np
 from convexguid.errors import SolverError
 from convexguid.progress import report
 from convexguid.scp.engine import Log, SCPAlgorithm
+from convexguid.scp.merit import max_violation
 from convexguid.scp.problem import NonconvexProgram, SCPSettings
-from convexguid.scp.state import SCPResult, merge_results
+from convexguid.scp.state import IterationState, SCPResult, merge_results
 from convexguid.verification import Verification
 
 DEFAULT_REPAIR_BUDGET = 6
@@ -113,15 +114,37 @@ def worst_violations(verification: Verification, count: int = 3) -> str:
     return "; ".join(parts + list(verification.remarks))
 
 
+FOLLOW_VIOLATION = 1e-2
+"""The first solve stops at its first accepted iterate whose violation is within this (each block in its own unit, a
+defect in state scales) to let the program follow the plan with its scales: the plan's sizes then mean something."""
+
+
+class PlanFollower:
+    """The first solve's stop at its first nearly feasible plan, where a program that estimated its scales may restate
+    itself in the scales the plan gives (``rescaled(x)``; docs/engine.md, 'Scales that follow the plan')."""
+
+    def __init__(self, program: NonconvexProgram) -> None:
+        self.program, self.asked = program, not hasattr(program, "rescaled")
+        self.rescaled: NonconvexProgram | None = None
+
+    def __call__(self, state: IterationState) -> bool:
+        """Whether to stop at ``state``: asked once, at the first accepted iterate within :data:`FOLLOW_VIOLATION`."""
+        if self.asked or not (state.history and state.history[-1].accepted) or \
+                max_violation(state.ev) > FOLLOW_VIOLATION:
+            return False
+        self.asked, self.rescaled = True, self.program.rescaled(state.x)
+        return self.rescaled is not None
+
+
 def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: PlanChecker, log: Log | None = None,
                    budget: int = DEFAULT_REPAIR_BUDGET, x0: np.ndarray | None = None,
                    on_round: Callable[[RepairRound], None] | None = None) -> VerifiedSolve:
     """Solve, check densely, repair and re-solve warm until verified or ``budget`` repairs are spent."""
-    first = SCPAlgorithm(program, settings, log, follow_plan=True)
-    result = last = first.run(x0)
+    follower = PlanFollower(program)
+    result = last = SCPAlgorithm(program, settings, log).run(x0, until=follower)
     what = "first solve"
-    if result.status == "rescaled":  # the same plan, measured in the scales its size gives (warm, as a repair)
-        program = first.rescaled
+    if follower.rescaled is not None:  # the same plan, measured in the scales its size gives (warm, as a repair)
+        program = follower.rescaled
         what = (f"first solve, restated after {result.iterations} iterations with its scales following the plan "
                 f"({getattr(program, 'scales_followed', '')})")
         last = SCPAlgorithm(program, settings, log).run(result.x, penalty=result.penalty)

@@ -64,10 +64,6 @@ NEARLY_FEASIBLE = 100.0
 """A first stall with the violation within this factor of the feasibility tolerance goes to phase 1 at once (it may
 be the subproblem's round-off: docs/engine.md, 'Restoration and phase 1'); a later stall raises the penalty."""
 
-FOLLOW_VIOLATION = 1e-2
-"""A program that may follow its plan with its scales is restated at the first accepted iterate whose violation is
-within this (each block in its own unit, a defect in state scales): the plan's sizes then mean something."""
-
 RESTORED = 0.01
 """Phase 1 ends once the violation is within this share of the feasibility tolerance: it seeks a feasible point, not
 the violation's minimum (measured: docs/engine.md, 'Restoration and phase 1')."""
@@ -87,11 +83,8 @@ class SCPAlgorithm:
     (the certificate) instead of raising the penalty."""
 
     def __init__(self, program: NonconvexProgram, settings: SCPSettings, log: Log | None = None,
-                 phase1: bool = False, follow_plan: bool = False) -> None:
+                 phase1: bool = False) -> None:
         self.program, self.settings, self.log, self.phase1 = program, settings, log, phase1
-        self.follow_plan = follow_plan and hasattr(program, "rescaled")
-        """Whether the program may be rescaled once, at the first nearly feasible iterate (:meth:`run`)."""
-        self.rescaled: NonconvexProgram | None = None
         self.trust_region = TrustRegionPolicy.from_settings(settings)
         self.penalty = PenaltyPolicy.from_settings(settings)
         self.correction = SecondOrderCorrection.from_settings(settings)
@@ -485,20 +478,15 @@ class SCPAlgorithm:
                                                                               self.settings.feasibility_tolerance),
                          notes=tuple(state.escape_log), penalty=state.penalty)
 
-    def run(self, x0: np.ndarray | None = None, penalty: float | None = None) -> SCPResult:
-        """The loop from ``x0`` to its end; ``penalty`` starts the penalty weight (default: the policy's start)."""
+    def run(self, x0: np.ndarray | None = None, penalty: float | None = None,
+            until: Callable[[IterationState], bool] | None = None) -> SCPResult:
+        """The loop from ``x0`` to its end; ``penalty`` starts the penalty weight (default: the policy's start);
+        ``until``, asked after each iteration that did not end the run, stops it as ``stopped`` when it answers True."""
         state = self.initialize(x0, penalty)
         while not state.finished:
             self.step(state)
-            if self.follow_plan and not state.finished and state.history and state.history[-1].accepted and \
-                    max_violation(state.ev) <= FOLLOW_VIOLATION:
-                # the first nearly feasible plan shows the states' sizes: a program whose estimated scales are far
-                # from them is restated, and the caller goes on with it (docs/engine.md, 'Scales that follow the plan')
-                self.follow_plan, self.rescaled = False, self.program.rescaled(state.x)
-                if self.rescaled is not None:
-                    state.escape_log.append(f"the estimated state scales followed the plan at iteration "
-                                            f"{state.iteration}")
-                    state.finish("rescaled", "restated with the estimated state scales following the plan")
+            if until is not None and not state.finished and until(state):
+                state.finish("stopped", "stopped by its caller")
         return self.result(state)
 
 
