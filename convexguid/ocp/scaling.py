@@ -24,7 +24,7 @@ Dymos' cannonball, its speed guessed at 150-200 m/s and nothing stated of its si
 range of 268978 m (the published 3183.25 m).
 
 Once a nearly feasible plan exists, an estimated scale it exceeds more than :data:`FOLLOW_FACTOR` times grows to its
-size (:func:`following_plan`, asked once by the engine's first solve).
+size (:func:`following_plan`, asked once by the check-repair loop's first solve).
 
 The estimate is crude, so values of a sensible size are kept (raised to it, Betts' shuttle took 491 iterations, not
 169).
