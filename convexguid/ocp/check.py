@@ -31,6 +31,7 @@ from convexguid.ocp.mesh import (
     interval_flows,
     plan_refinement,
     refined_program,
+    state_names,
 )
 from convexguid.ocp.parts import Margins, NumericFunction
 from convexguid.ocp.pinned import broken_beside_end, net_of_final_miss, netted_bounds, with_rate_conditions
@@ -106,7 +107,7 @@ class DenseChecker:
         u = self.control(program, z)
         node_times = program.final_time(z) * program.node_shares()
         state = program.states(z)[0].copy()
-        names = tuple(v.name for v in program.problem.states)
+        names = state_names(program)
         times, states = [], []
         for k in range(program.N):
             grid = np.linspace(node_times[k], node_times[k + 1], self.points + 1)

@@ -101,6 +101,11 @@ def held_control(program: Transcription, z: np.ndarray):
     return lambda t: np.clip(planned(t), low, high)
 
 
+def state_names(program: Transcription) -> tuple[str, ...]:
+    """The program's state names in their order (what :func:`fly` names a rate that is not a number by)."""
+    return tuple(v.name for v in program.problem.states)
+
+
 class _NotANumber(Exception):
     """A rate that is not a number: ``(t, indices of the states)``."""
 
@@ -144,8 +149,8 @@ def interval_flows(program: Transcription, z: np.ndarray, control=None) -> list:
     u = held_control(program, z) if control is None else control
     rate, scales = NumericFunction(program.rate), program.state_scales
     states, times = program.states(z), program.final_time(z) * program.node_shares()
-    names = tuple(v.name for v in program.problem.states)
-    return [fly(rate, u, (times[k], times[k + 1]), states[k], names, atol=1e-12 * scales, dense_output=True)
+    return [fly(rate, u, (times[k], times[k + 1]), states[k], state_names(program), atol=1e-12 * scales,
+                dense_output=True)
             for k in range(program.N)]
 
 

@@ -167,6 +167,7 @@ class Transcription:
         return type(self)(problem, intervals=self.N)
 
     rescaled = following_plan  # (z): restated with its estimated scales grown to the plan's sizes, or None
+    scales_followed = ""  # a restated program's list of the scales that grew ("v 0.1 -> 13.6")
 
     def with_margins(self, margins: Margins) -> Transcription:
         """The same program with other repair margins. Margins enter only as numbers (added to the path values, the

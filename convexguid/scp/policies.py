@@ -218,7 +218,8 @@ class FunnelPolicy:
                predicted_violation: float) -> tuple[bool, float, Funnel]:
         """``(accepted, ratio, funnel)``: a step the merit's ratio test accepts, or else one :meth:`judge` accepts
         (with its ratio), unless it returns to a point an h-step left; and the funnel after it (an accepted h-step
-        narrows it and remembers the point it left). A refused step's ratio is at most 0 (the radius shrinks)."""
+        narrows it; an h-step the merit refused, or any step to less violation at a higher objective, remembers the
+        point it left). A refused step's ratio is at most 0 (the radius shrinks)."""
         kind, ratio = self.judge(funnel.width, violation, violation_new, objective_drop, predicted_objective,
                                  predicted_violation)
         accepted = merit_accepts or kind is not None
@@ -227,10 +228,9 @@ class FunnelPolicy:
         if violation_new < violation:
             # a point left for less violation at a higher objective is not to be come back to, whatever accepted the
             # step: an f-step back to one a merit step had left made a pair of steps cycle (docs/engine.md, 'Funnel')
-            if objective_drop < 0 or (kind == "h" and not merit_accepts):
-                funnel = Funnel(funnel.width, funnel.left + ((violation, objective),))
-            if kind == "h":
-                funnel = Funnel(self.narrowed(funnel.width, violation, violation_new), funnel.left)
+            leaves = objective_drop < 0 or (kind == "h" and not merit_accepts)
+            funnel = Funnel(self.narrowed(funnel.width, violation, violation_new) if kind == "h" else funnel.width,
+                            funnel.left + ((violation, objective),) if leaves else funnel.left)
         return True, (merit_ratio if merit_accepts else ratio), funnel
 
 
