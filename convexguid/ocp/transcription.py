@@ -34,8 +34,8 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.ocp import periodic
-from convexguid.ocp.boundary import affine_rows, nonlinear_equalities
+from convexguid.ocp import linear_rows, periodic
+from convexguid.ocp.boundary import nonlinear_equalities
 from convexguid.ocp.curvature import ElementCurvature, interval_of_rows
 from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.guess import flown_free_states
@@ -395,86 +395,16 @@ class Transcription:
         return cost
 
     def linear_constraints(self) -> LinearConstraints:
-        p, N, nx, n = self.problem, self.N, self.nx, self.num_variables
-        rows, values = [], []
-        for i, v in enumerate(p.states):
-            for node, value in ((0, v.initial), (N, v.final)):
-                if value is not None:
-                    rows.append(node * nx + i)
-                    values.append(value)
-        A = sp.coo_matrix((np.ones(len(rows)), (np.arange(len(rows)), rows)), shape=(len(rows), n))
-        boundary = affine_rows(self)
-        if boundary is not None:
-            A = sp.vstack([A, boundary[0]]).tocoo()
-            values += list(boundary[1])
-        low, high = self._bounds()
-        upper, lower = np.flatnonzero(np.isfinite(high)), np.flatnonzero(np.isfinite(low))
-        blocks = [sp.coo_matrix((np.ones(upper.size), (np.arange(upper.size), upper)), shape=(upper.size, n)),
-                  sp.coo_matrix((-np.ones(lower.size), (np.arange(lower.size), lower)), shape=(lower.size, n))]
-        blocks += self._interpolated_control_bounds()
-        if self.fuel_norm == 1:
-            # -s <= v <= s for every control value: v - s <= 0 and -v - s <= 0
-            controls = np.arange(self.control_start, self.slack_start)
-            slacks = np.arange(self.slack_start, self.slack_start + self.num_slacks)
-            rows = np.arange(controls.size)
-            for sign in (1.0, -1.0):
-                blocks.append(sp.coo_matrix((np.concatenate([np.full(rows.size, sign), -np.ones(rows.size)]),
-                                             (np.concatenate([rows, rows]), np.concatenate([controls, slacks]))),
-                                            shape=(rows.size, n)))
-        G = sp.vstack(blocks)
-        # a repaired state bound holds with its margin at the nodes next to where the dense check saw it broken
-        tightened = np.concatenate([self.margins.bounds, np.zeros(n - self.margins.bounds.size)])
-        h = np.concatenate([high[upper] - tightened[upper], -low[lower] - tightened[lower],
-                            self._interpolated_control_limits(),
-                            np.zeros(2 * self.num_slacks if self.fuel_norm == 1 else 0)])
-        return LinearConstraints(A, np.array(values, dtype=float), G.tocoo(), h)
-
-    def _interpolated_control_bounds(self) -> list[sp.coo_matrix]:
-        """Rows ``+-(sum_i a_i v_i)``: the control's interpolant at :data:`INTERPOLATION_SAMPLES` for every bounded
-        control on every interval (upper bounds, then lower; :meth:`_interpolated_control_limits` gives their
-        right-hand sides)."""
-        rows, cols, vals, count = [], [], [], 0
-        for sign, upper in ((1.0, True), (-1.0, False)):
-            for k in range(self.N):
-                for j in self._bounded_controls(upper):
-                    for s in self.INTERPOLATION_SAMPLES:
-                        for column, weight in zip(self.interval_control_columns(k, j), self.interval_weights(s),
-                                                  strict=True):
-                            rows.append(count)
-                            cols.append(column)
-                            vals.append(sign * weight)
-                        count += 1
-        return [sp.coo_matrix((vals, (rows, cols)), shape=(count, self.num_variables))]
-
-    def _interpolated_control_limits(self) -> np.ndarray:
-        controls, samples = self.problem.controls, len(self.INTERPOLATION_SAMPLES)
-        upper = [controls[j].upper for _ in range(self.N) for j in self._bounded_controls(True)]
-        lower = [-controls[j].lower for _ in range(self.N) for j in self._bounded_controls(False)]
-        return np.repeat(np.array(upper + lower, dtype=float), samples)
-
-    def _bounded_controls(self, upper: bool) -> list[int]:
-        return [j for j, v in enumerate(self.problem.controls) if (v.upper if upper else v.lower) is not None]
-
-    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        p, N = self.problem, self.N
-        xl, xh = p.bounds_array(p.states)
-        ul, uh = p.bounds_array(p.controls)
-        per_axis = self.control_values_per_axis()
-        low = [np.tile(xl, N + 1), np.tile(ul, per_axis)]
-        high = [np.tile(xh, N + 1), np.tile(uh, per_axis)]
-        low += [np.zeros(self.num_slacks), np.full(int(self.epigraph), -np.inf)]
-        high += [np.full(self.num_slacks, np.inf), np.full(int(self.epigraph), np.inf)]
-        if self.free_time:
-            low.append([p.tf_bounds[0]])
-            high.append([p.tf_bounds[1]])
-        return np.concatenate(low), np.concatenate(high)
+        """Boundary values, affine boundary rows, bounds (a repaired state bound less its margin), the bounded
+        controls' interpolants and minimum fuel's slack rows (:mod:`convexguid.ocp.linear_rows`)."""
+        return linear_rows.linear_constraints(self)
 
     def guarded_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """The states' bounds, at every node: the steps keep short of them until they are nearly met
         (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`). A state's bound is often where its dynamics stop
         meaning anything (a mass, a density, a logarithm's argument); a control's is where bang-bang plans sit, and
         is left unguarded."""
-        low, high = self._bounds()
+        low, high = linear_rows.variable_bounds(self)
         states = np.arange(low.size) < self.control_start
         return np.where(states, low, -np.inf), np.where(states, high, np.inf)
 
