@@ -264,17 +264,26 @@ class SCPAlgorithm:
         ratio = decrease_ratio(state.merit - merit_new, predicted)
         linearized = linearized_violation(state.raw, self.outputs, d)
         predicted_objective = state.objective - (model - state.penalty * linearized)
-        if self.correction.wanted(ratio, state.raw, raw_new):
-            corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, raw_new, d),
+        trial, trial_raw, violation = d, raw_new, penalty_sum(ev_new)
+        for _ in range(self.correction.rounds):
+            if not self.correction.wanted(ratio, state.raw, trial_raw):
+                break
+            # each correction shifts the constants to what its own trial point showed (IPOPT's repeated corrections)
+            corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, trial_raw, trial),
                                                   hessian, curved)
-            if corrected.usable:
-                x_soc = state.x + assembler.step(corrected.x)
-                _, ev_soc = self._evaluate(state, x_soc, jacobians=False)
-                merit_soc = self.merit(ev_soc, x_soc, state.penalty)
-                ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
-                if ratio_soc > ratio:
-                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
-                    d = x_new - state.x
+            if not corrected.usable:
+                break
+            trial = assembler.step(corrected.x)
+            x_soc = state.x + trial
+            trial_raw, ev_soc = self._evaluate(state, x_soc, jacobians=False)
+            merit_soc = self.merit(ev_soc, x_soc, state.penalty)
+            ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
+            if ratio_soc > ratio:
+                x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
+                d = x_new - state.x
+            if not self.correction.goes_on(violation, penalty_sum(ev_soc)):
+                break
+            violation = penalty_sum(ev_soc)
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
         if curved is None:
             state.pinned = state.pinned + 1 if step >= PINNED * state.radius else 0
