@@ -118,6 +118,19 @@ def test_the_newton_step_is_regularized_where_the_reduced_hessian_is_indefinite(
     assert newton.shift == 0.0 and newton.negative_direction is None and np.allclose(newton.step, [-0.25, 0.25])
 
 
+def test_rows_of_very_different_units_are_all_kept_in_the_working_set():
+    """A boundary value's row in a state scaled by 4e7 beside two unit rows: judged by its pivots before the rows
+    were equilibrated, the unit rows fell below 1e-6 of the largest and were left out as dependent, and the step broke
+    them. Each row divided by its norm, all three hold, and the multipliers are those of the rows as given."""
+    rows = np.array([[4e7, 0.0, 0.0, 0.0], [0.0, 1.0, 0.2, 0.0], [0.0, 0.0, 1.0, 0.3]])
+    values = np.array([0.0, 0.1, -0.2])
+    gradient = np.array([0.0, 1.0, 1.0, 1.0])
+    step = newton_step(gradient, np.eye(4), rows, values)
+    assert np.allclose(rows @ step.step + values, 0.0, atol=1e-12)
+    # stationarity with the multipliers of the rows as given: g + H d + A^T y = 0
+    assert np.allclose(gradient + step.step + rows.T @ step.multipliers, 0.0, atol=1e-10)
+
+
 def test_a_saddle_is_left_along_its_negative_curvature():
     stuck = solve_scp(SymmetricSaddle(), SCPSettings(backend="clarabel", second_order=False))
     assert stuck.x[0] == pytest.approx(0.0, abs=1e-9)  # the first-order loop cannot leave the symmetric point

@@ -490,3 +490,22 @@ def test_a_scale_far_below_the_plans_size_follows_the_plan():
     assert grown == pytest.approx(np.max(np.abs(solution.nodes.columns["v"])), rel=0.2)
     answer = solve_with_ipopt(transcribe(p))
     assert answer.success and solution.objective == pytest.approx(answer.objective, rel=1e-6)
+
+
+def test_a_final_condition_blind_at_the_guess_is_reached_off_a_saddle_of_the_violation():
+    """cos(phi) cos(psi) = cos(0.3) at the end of two integrators started at rest: on the straight-line guess (no turn)
+    the condition's gradient vanishes, every linearization misses it, and phase 1 stalls where the violation is at
+    a maximum. That is no certificate of infeasibility: phase 1 steps off along the violation's negative curvature
+    and the plan reaches the least energy, 0.09 (a turn of 0.3 rad on one axis at a constant rate)."""
+    p = Problem("blind-final-condition")
+    phi, psi = p.state("phi", initial=0.0), p.state("psi", initial=0.0)
+    a, b = p.control("a", bounds=(-1.0, 1.0)), p.control("b", bounds=(-1.0, 1.0))
+    p.dynamics({phi: a, psi: b})
+    p.boundary_constraint("turn", ca.cos(phi) * ca.cos(psi) - math.cos(0.3), at="final")
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(20)
+    solution = p.solve()
+    assert solution.status == "converged", solution.message
+    assert solution.objective == pytest.approx(0.09, rel=1e-6)
+    assert "stepped off a saddle of the violation" in solution.message

@@ -16,6 +16,7 @@ off the eigenvalues: Wachter & Biegler, Math. Program. 106, 2006, Sec. 3.1; docs
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg as la
@@ -46,31 +47,50 @@ class NewtonStep:
     shift: float = 0.0
 
 
-def null_space_split(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(Y, Z, R, pivots)``: orthonormal bases of the range of ``rows.T`` and of the null space of ``rows``, from the
-    pivoted QR factorization :math:`A^T P = Q R`; rows whose pivot is below :data:`RANK_TOLERANCE` of the largest
-    depend on the others (a quaternion's unit norm, kept by the dynamics, fixed at both ends) and are left out."""
+class NullSpaceSplit(NamedTuple):
+    """Orthonormal bases ``Y`` of the range of the (equilibrated) rows' transpose and ``Z`` of their null space, the
+    triangular factor ``R`` and the ``pivots`` of the independent rows, and every row's Euclidean ``norms``."""
+
+    Y: np.ndarray
+    Z: np.ndarray
+    R: np.ndarray
+    pivots: np.ndarray
+    norms: np.ndarray
+
+
+def null_space_split(rows: np.ndarray) -> NullSpaceSplit:
+    """The pivoted QR factorization :math:`(D^{-1} A)^T P = Q R` of the rows, each divided by its norm (:math:`D`),
+    so that a row's independence is judged by its direction and not its units: unequilibrated, a boundary value's row
+    in a state scaled by 4e5 made twelve unit-norm defect rows of Betts' aero-assisted plane change look dependent.
+    Rows whose pivot is below :data:`RANK_TOLERANCE` of the largest depend on the others (a quaternion's unit norm,
+    kept by the dynamics, fixed at both ends) and are left out."""
     n = rows.shape[1]
+    norms = np.linalg.norm(rows, axis=1) if rows.shape[0] else np.zeros(0)
+    norms = np.where(norms > 0, norms, 1.0)
     if rows.shape[0] == 0:
-        return np.zeros((n, 0)), np.eye(n), np.zeros((0, 0)), np.zeros(0, dtype=int)
-    Q, R, pivots = la.qr(rows.T, pivoting=True, mode="full")
+        return NullSpaceSplit(np.zeros((n, 0)), np.eye(n), np.zeros((0, 0)), np.zeros(0, dtype=int), norms)
+    Q, R, pivots = la.qr((rows / norms[:, None]).T, pivoting=True, mode="full")
     diag = np.abs(np.diag(R))
     rank = int(np.sum(diag > RANK_TOLERANCE * max(diag[0], 1e-300))) if diag.size else 0
-    return Q[:, :rank], Q[:, rank:], R[:rank, :rank], pivots[:rank]
+    return NullSpaceSplit(Q[:, :rank], Q[:, rank:], R[:rank, :rank], pivots[:rank], norms)
 
 
-def least_norm_step(Y: np.ndarray, R: np.ndarray, pivots: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """:math:`-Y (R^T)^{-1} c_P`: the least-norm step onto the linearized rows of a :func:`null_space_split`."""
-    return Y @ la.solve_triangular(R, -values[pivots], trans="T") if pivots.size else np.zeros(Y.shape[0])
+def least_norm_step(split: NullSpaceSplit, values: np.ndarray) -> np.ndarray:
+    """:math:`-Y (R^T)^{-1} (D^{-1} c)_P`: the least-norm step onto the linearized rows of a split."""
+    Y, _, R, pivots, norms = split
+    if not pivots.size:
+        return np.zeros(Y.shape[0])
+    return Y @ la.solve_triangular(R, -(values / norms)[pivots], trans="T")
 
 
 def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, values: np.ndarray) -> NewtonStep:
     """The EQP step for gradient ``g``, Hessian ``H``, working-set rows ``A`` and values ``c`` (all scaled): range
-    part :math:`d_Y = -Y (R^T)^{-1} c_P` (least norm onto the linearized working set), null-space part from
-    :math:`Z^T H Z\\, p = -Z^T (g + H d_Y)`, multipliers from :math:`R\\, y_P = -Y^T (g + H d)` (zero on dependent
-    rows)."""
-    Y, Z, R, pivots = null_space_split(rows)
-    range_step = least_norm_step(Y, R, pivots, values)
+    part :math:`d_Y = -Y (R^T)^{-1} (D^{-1} c)_P` (least norm onto the linearized working set), null-space part from
+    :math:`Z^T H Z\\, p = -Z^T (g + H d_Y)`, multipliers from :math:`R\\, (D y)_P = -Y^T (g + H d)` (zero on
+    dependent rows; :func:`null_space_split` for :math:`D`)."""
+    split = null_space_split(rows)
+    Y, Z, R, pivots, norms = split
+    range_step = least_norm_step(split, values)
     reduced = Z.T @ hessian @ Z
     reduced = 0.5 * (reduced + reduced.T)
     smallest, direction, shift = np.inf, None, 0.0
@@ -91,7 +111,7 @@ def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, val
         step = range_step + Z @ null
     multipliers = np.zeros(rows.shape[0])
     if pivots.size:
-        multipliers[pivots] = la.solve_triangular(R, -(Y.T @ (gradient + hessian @ step)))
+        multipliers[pivots] = la.solve_triangular(R, -(Y.T @ (gradient + hessian @ step))) / norms[pivots]
     return NewtonStep(step, multipliers, smallest, direction, shift)
 
 
@@ -115,8 +135,7 @@ class LocalModel:
         """The least-norm scaled step :math:`-A^+ c` back onto the working set from where its values are ``values``:
         added to a trial step whose working set came out so, it cancels them to first order (Fletcher's second-order
         correction in its least-norm form, Nocedal & Wright eq. 18.53)."""
-        Y, _, R, pivots = null_space_split(self.rows)
-        return least_norm_step(Y, R, pivots, values)
+        return least_norm_step(null_space_split(self.rows), values)
 
     def quadratic(self, u: np.ndarray) -> float:
         """:math:`\\nabla f^T d + \\tfrac12 u^T H u`: the objective part of the model."""

@@ -50,7 +50,14 @@ from convexguid.scp.merit import (
     violation_by_block,
 )
 from convexguid.scp.newton import Candidate, newton_candidate
-from convexguid.scp.optimality import certified_by_least_squares, certified_here, finish_optimal, kkt_met, measure_kkt
+from convexguid.scp.optimality import (
+    certified_by_least_squares,
+    certified_here,
+    finish_optimal,
+    kkt_met,
+    measure_kkt,
+    off_saddle,
+)
 from convexguid.scp.policies import Funnel, FunnelPolicy, PenaltyPolicy, SecondOrderCorrection, TrustRegionPolicy
 from convexguid.scp.problem import CurvatureModel, Evaluation, NonconvexProgram, SCPSettings
 from convexguid.scp.restoration import restore_start, run_phase1
@@ -264,26 +271,17 @@ class SCPAlgorithm:
         ratio = decrease_ratio(state.merit - merit_new, predicted)
         linearized = linearized_violation(state.raw, self.outputs, d)
         predicted_objective = state.objective - (model - state.penalty * linearized)
-        trial, trial_raw, violation = d, raw_new, penalty_sum(ev_new)
-        for _ in range(self.correction.rounds):
-            if not self.correction.wanted(ratio, state.raw, trial_raw):
-                break
-            # each correction shifts the constants to what its own trial point showed (IPOPT's repeated corrections)
-            corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, trial_raw, trial),
+        if self.correction.wanted(ratio, state.raw, raw_new):
+            corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, raw_new, d),
                                                   hessian, curved)
-            if not corrected.usable:
-                break
-            trial = assembler.step(corrected.x)
-            x_soc = state.x + trial
-            trial_raw, ev_soc = self._evaluate(state, x_soc, jacobians=False)
-            merit_soc = self.merit(ev_soc, x_soc, state.penalty)
-            ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
-            if ratio_soc > ratio:
-                x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
-                d = x_new - state.x
-            if not self.correction.goes_on(violation, penalty_sum(ev_soc)):
-                break
-            violation = penalty_sum(ev_soc)
+            if corrected.usable:
+                x_soc = state.x + assembler.step(corrected.x)
+                _, ev_soc = self._evaluate(state, x_soc, jacobians=False)
+                merit_soc = self.merit(ev_soc, x_soc, state.penalty)
+                ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
+                if ratio_soc > ratio:
+                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
+                    d = x_new - state.x
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
         if curved is None:
             state.pinned = state.pinned + 1 if step >= PINNED * state.radius else 0
@@ -457,8 +455,17 @@ class SCPAlgorithm:
             finish_optimal(self, state)
             return
         if self.phase1:
-            state.finish("infeasible", "the elastic phase-1 problem stalls with the constraints still violated: "
-                         + describe_violations(state.ev))
+            # a stationary point of the violation certifies infeasibility only if it is a minimum of the violation
+            saddle = off_saddle(self, state, penalty_sum(state.ev), "a saddle of the violation")
+            if saddle == "stepped":
+                return
+            stall = "the elastic phase-1 problem stalls with the constraints still violated: " + describe_violations(
+                state.ev)
+            if saddle:
+                state.finish("unverified", f"{stall}; no certificate of infeasibility, the point is not proved a "
+                                           f"minimum of the violation: {state.escape_log[-1]}")
+            else:
+                state.finish("infeasible", stall)
             return
         # just above the tolerance the subproblem's round-off may be the cause: restore feasibility once first
         nearly_feasible = max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance

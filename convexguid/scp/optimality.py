@@ -61,30 +61,43 @@ def certified_here(algo: SCPAlgorithm, state: IterationState, result: BackendRes
 
 def finish_optimal(algo: SCPAlgorithm, state: IterationState) -> None:
     """A KKT point: converged ("KKT conditions met", then any steps off saddles), unless the reduced Hessian has
-    negative curvature worth following, :math:`\\tfrac12 |\\lambda_{min}| \\Delta_0^2 > \\epsilon\\, |f|` for the
-    initial trust radius :math:`\\Delta_0` and the KKT tolerance :math:`\\epsilon` (then step off the saddle; why:
-    docs/engine.md, 'KKT certificates and the polish')."""
+    negative curvature worth following (then :func:`off_saddle` steps off it)."""
+    unit = state.kkt.objective_unit if state.kkt is not None else max(abs(state.objective), 1e-12)
+    if not algo.phase1 and off_saddle(algo, state, unit, "a saddle") == "stepped":
+        return
+    state.finish("converged", "; ".join(["KKT conditions met", *state.escape_log]))
+
+
+def off_saddle(algo: SCPAlgorithm, state: IterationState, unit: float, what: str) -> str:
+    """``"stepped"`` when the run stepped off ``what`` at a stationary point (of the merit, or in phase 1 of the
+    violation), ``"saddle"`` when it found the negative curvature but no step along it that pays, else ``""``: where
+    the working set's reduced Hessian of the Lagrangian has negative curvature worth following,
+    :math:`\\tfrac12 |\\lambda_{min}| \\Delta_0^2 > \\epsilon` times ``unit`` for the initial trust
+    radius :math:`\\Delta_0` and the KKT tolerance :math:`\\epsilon`, it is followed by :func:`escape_saddle` (why:
+    docs/engine.md, 'KKT certificates and the polish'). A violated constraint whose gradient vanishes (a final
+    heading condition ``cos(phi) cos(psi) = c`` on a guess that never turns) is invisible to every linearization; in
+    phase 1 its curvature, weighted by the sign of its violation, shows the way off."""
     models = algo.second_order
     # with a cone active the working set leaves out a constraint that holds: its negative curvature may point out
     # of the cone, no proof of a saddle (measured: docs/engine.md, 'KKT certificates and the polish')
-    if (models is not None and not algo.phase1 and state.escapes < MAX_ESCAPES and state.multipliers is not None
-            and not state.multipliers.cone_active()):
-        working = models.working_set(state.x, state.raw, state.multipliers, algo.settings.feasibility_tolerance,
-                                     state.penalty)
-        model = models.at(state.x, state.raw, state.multipliers, working)
-        newton = model.newton()
-        gain = 0.5 * max(-newton.smallest_eigenvalue, 0.0) * algo.trust_region.initial**2
-        unit = state.kkt.objective_unit if state.kkt is not None else max(abs(state.objective), 1e-12)
-        if newton.shift and gain > algo.settings.kkt_tolerance * unit:
-            if escape_saddle(algo, state, model, newton.negative_direction, newton.smallest_eigenvalue, unit):
-                state.escape_log.append(f"stepped off a saddle (reduced-Hessian eigenvalue "
-                                        f"{newton.smallest_eigenvalue:.3g}) at iteration {state.iteration}")
-                return
-            state.escape_log.append(f"the working set's reduced Hessian has a negative eigenvalue "
-                                    f"({newton.smallest_eigenvalue:.3g}) at iteration {state.iteration}, but the "
-                                    "merit rises both ways along its direction: a minimum, as far as steps from the "
-                                    "first trust radius down show")
-    state.finish("converged", "; ".join(["KKT conditions met", *state.escape_log]))
+    if (models is None or state.escapes >= MAX_ESCAPES or state.multipliers is None
+            or state.multipliers.cone_active()):
+        return ""
+    working = models.working_set(state.x, state.raw, state.multipliers, algo.settings.feasibility_tolerance,
+                                 state.penalty)
+    model = models.at(state.x, state.raw, state.multipliers, working)
+    newton = model.newton()
+    gain = 0.5 * max(-newton.smallest_eigenvalue, 0.0) * algo.trust_region.initial**2
+    if not (newton.shift and gain > algo.settings.kkt_tolerance * unit):
+        return ""
+    if escape_saddle(algo, state, model, newton.negative_direction, newton.smallest_eigenvalue, unit):
+        state.escape_log.append(f"stepped off {what} (reduced-Hessian eigenvalue {newton.smallest_eigenvalue:.3g}) "
+                                f"at iteration {state.iteration}")
+        return "stepped"
+    state.escape_log.append(f"the working set's reduced Hessian has a negative eigenvalue "
+                            f"({newton.smallest_eigenvalue:.3g}) at iteration {state.iteration}, but the merit rises "
+                            "both ways along its direction, from the first trust radius down")
+    return "saddle"
 
 
 ESCAPE_SHARE = 0.1

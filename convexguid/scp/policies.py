@@ -244,21 +244,10 @@ class SecondOrderCorrection:
 
     threshold: float
     enabled: bool = True
-    rounds: int = 4
-    """Corrections one step may take, each shifted by its own trial point (IPOPT's ``max_soc``), while the step's
-    ratio stays below ``threshold``."""
-    progress: float = 0.99
-    """A further correction only after one that cut the violation below this share of the one before (IPOPT's
-    ``kappa_soc``)."""
 
     @classmethod
     def from_settings(cls, s: SCPSettings) -> SecondOrderCorrection:
         return cls(s.expand_ratio, s.second_order_correction)
-
-    def goes_on(self, violation: float, corrected: float) -> bool:
-        """Whether a correction that took the trial point's violation from ``violation`` to ``corrected`` is worth
-        another (if the step's ratio still wants one)."""
-        return corrected <= self.progress * violation
 
     def wanted(self, ratio: float, ev: Evaluation, trial: Evaluation) -> bool:
         """Whether to correct a step from the point of ``ev`` whose trial point evaluated to ``trial``: not when a

@@ -114,6 +114,7 @@ def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
     state.iteration += p1.iteration
     state.history.extend(replace(r, iteration=state.iteration - p1.iteration + r.iteration) for r in p1.history)
     state.solver_time_s += p1.solver_time_s
+    state.escape_log += [f"phase 1 {note}" for note in p1.escape_log]
     state.convexify_time_s += p1.convexify_time_s
     if p1.status not in ("converged", "infeasible"):
         state.finish(p1.status, "phase-1 (least violation) ended " + p1.status + ": " + p1.message)
