@@ -509,3 +509,30 @@ def test_a_final_condition_blind_at_the_guess_is_reached_off_a_saddle_of_the_vio
     assert solution.status == "converged", solution.message
     assert solution.objective == pytest.approx(0.09, rel=1e-6)
     assert "stepped off a saddle of the violation" in solution.message
+
+
+def test_a_sum_of_squared_fit_residuals_started_at_zero_gets_a_scale_for_its_epigraph():
+    """Fit y' = -k y, y(0) = 1, to ten samples of exp(-t) (with a ripple), each residual a parameter tied to its
+    sample by a point equality, the cost their sum of squares: zero, with a zero gradient, at the guess. Scaled by its
+    first-order change alone (the 1e-6 floor), the cost's epigraph variable crawled for some twenty iterations; its
+    second-order change (the residuals' own scales) sizes it, and the fit matches IPOPT's on the same program."""
+    samples = [math.exp(-k / 10) + 0.01 * math.sin(7 * k) for k in range(1, 11)]
+
+    def build() -> Problem:
+        p = Problem("fit")
+        y = p.state("y", initial=1.0)
+        rate = p.parameter("k", bounds=(0.0, None))
+        p.dynamics({y: -rate * y})
+        p.final_time(fixed=1.0)
+        residuals = [p.parameter(f"e{k}") for k in range(1, 11)]
+        for k, (e, sample) in enumerate(zip(residuals, samples, strict=True), start=1):
+            p.point_equality(f"sample{k}", y - sample - e, at=k / 10)
+        p.minimize_terminal(sum(e**2 for e in residuals))
+        p.transcription(10)
+        return p
+
+    solution = build().solve()
+    assert solution.status == "converged", solution.message
+    # both within their KKT tolerances of the optimum (1e-6 of the objective's unit)
+    assert solution.objective == pytest.approx(solve_with_ipopt(transcribe(build())).objective, rel=1e-5)
+    assert solution.iterations < 12

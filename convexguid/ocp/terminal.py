@@ -41,16 +41,20 @@ def terminal_gradient(program: Transcription) -> np.ndarray:
 
 def terminal_scale(program: Transcription) -> float:
     """A magnitude for the terminal cost's epigraph variable: its size at the guess's final state, or the change a
-    move of every final state (and a free final time) by its own scale makes in it, whichever is larger. (Its size
-    alone fails a cost that is zero at the guess, such as COPS' catalyst mixing, :math:`-1 + x_1 + x_2`: scaled by
-    1e-6, the epigraph variable moved 1e-3 per iteration at the largest trust radius.)"""
+    move of every final state (and a free final time) by its own scale makes in it, to second order, whichever is
+    larger. (Its size alone fails a cost that is zero at the guess, such as COPS' catalyst mixing,
+    :math:`-1 + x_1 + x_2`: scaled by 1e-6, the epigraph variable moved 1e-3 per iteration at the largest trust
+    radius; the first order alone fails a sum of squared fit residuals started at zero, whose gradient vanishes
+    there: its epigraph crawled the same way.)"""
     p = program.problem
     final = p.straight_line()[1]
     tf = p.tf_guess if program.free_time else p.tf
     state, time = p.state_vector(), p.time
-    reach = ca.Function("reach", [state, time], [ca.jacobian(p.terminal, state), ca.jacobian(p.terminal, time)])
-    by_state, by_time = (np.abs(np.asarray(v, dtype=float)).ravel() for v in reach(final, tf))
-    change = float(by_state @ program.state_scales)
+    reach = ca.Function("reach", [state, time], [ca.jacobian(p.terminal, state), ca.jacobian(p.terminal, time),
+                                                 ca.hessian(p.terminal, state)[0]])
+    by_state, by_time, curvature = (np.abs(np.asarray(v, dtype=float)) for v in reach(final, tf))
+    scales = program.state_scales
+    change = float(by_state.ravel() @ scales + 0.5 * scales @ curvature @ scales)
     if program.free_time:
-        change += float(by_time[0]) * tf
+        change += float(by_time.ravel()[0]) * tf
     return max(abs(program._terminal_value(final, tf)), change, 1e-6)
