@@ -48,8 +48,8 @@ class NewtonStep:
 
 
 class NullSpaceSplit(NamedTuple):
-    """Orthonormal bases ``Y`` of the range of the (equilibrated) rows' transpose and ``Z`` of their null space, the
-    triangular factor ``R`` and the ``pivots`` of the independent rows, and every row's Euclidean ``norms``."""
+    """Bases of the range (``Y``) and null space (``Z``) of the rows, ``R`` and ``pivots`` of the independent ones,
+    and every row's ``norms``."""
 
     Y: np.ndarray
     Z: np.ndarray
@@ -59,11 +59,10 @@ class NullSpaceSplit(NamedTuple):
 
 
 def null_space_split(rows: np.ndarray) -> NullSpaceSplit:
-    """The pivoted QR factorization :math:`(D^{-1} A)^T P = Q R` of the rows, each divided by its norm (:math:`D`),
-    so that a row's independence is judged by its direction and not its units: unequilibrated, a boundary value's row
-    in a state scaled by 4e5 made twelve unit-norm defect rows of Betts' aero-assisted plane change look dependent.
-    Rows whose pivot is below :data:`RANK_TOLERANCE` of the largest depend on the others (a quaternion's unit norm,
-    kept by the dynamics, fixed at both ends) and are left out."""
+    """The pivoted QR factorization :math:`(D^{-1} A)^T P = Q R` of the rows each divided by its norm (:math:`D`):
+    independence judged by direction, not units (docs/engine.md, 'Newton end game'). Rows whose pivot is below
+    :data:`RANK_TOLERANCE` of the largest depend on the others (a quaternion's unit norm, kept by the dynamics, fixed
+    at both ends) and are left out."""
     n = rows.shape[1]
     norms = np.linalg.norm(rows, axis=1) if rows.shape[0] else np.zeros(0)
     norms = np.where(norms > 0, norms, 1.0)

@@ -69,14 +69,10 @@ def finish_optimal(algo: SCPAlgorithm, state: IterationState) -> None:
 
 
 def off_saddle(algo: SCPAlgorithm, state: IterationState, unit: float, what: str) -> str:
-    """``"stepped"`` when the run stepped off ``what`` at a stationary point (of the merit, or in phase 1 of the
-    violation), ``"saddle"`` when it found the negative curvature but no step along it that pays, else ``""``: where
-    the working set's reduced Hessian of the Lagrangian has negative curvature worth following,
-    :math:`\\tfrac12 |\\lambda_{min}| \\Delta_0^2 > \\epsilon` times ``unit`` for the initial trust
-    radius :math:`\\Delta_0` and the KKT tolerance :math:`\\epsilon`, it is followed by :func:`escape_saddle` (why:
-    docs/engine.md, 'KKT certificates and the polish'). A violated constraint whose gradient vanishes (a final
-    heading condition ``cos(phi) cos(psi) = c`` on a guess that never turns) is invisible to every linearization; in
-    phase 1 its curvature, weighted by the sign of its violation, shows the way off."""
+    """``"stepped"`` when the run stepped off ``what`` (a saddle of the merit, or in phase 1 of the violation) along
+    the working set's negative curvature (:func:`escape_saddle`), ``"saddle"`` when that curvature promises more than
+    the KKT tolerance of ``unit`` within the first trust radius but no step along it pays, else ``""`` (why:
+    docs/engine.md, 'KKT certificates and the polish' and 'Restoration and phase 1')."""
     models = algo.second_order
     # with a cone active the working set leaves out a constraint that holds: its negative curvature may point out
     # of the cone, no proof of a saddle (measured: docs/engine.md, 'KKT certificates and the polish')
