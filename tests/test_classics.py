@@ -164,6 +164,30 @@ def test_a_control_that_a_turn_changes_is_not_an_angle(statement):
     assert transcribe(p).control_periods == (None,)
 
 
+def test_a_bounded_heading_wider_than_a_turn_is_measured_in_radians():
+    """The PROPT/PSOPT obstacle avoidance: x' = V cos(theta), y' = V sin(theta) from (0, 0) to (1.2, 1.6) in 1 s past
+    two circular obstacles, the heading bounded to [-10, 10] rad, the integral of the squared speed (V^2 = 4.571044
+    whatever the path) its cost. Scaled by its bounds, the heading jumped by whole turns between neighbouring nodes
+    and the run ended unverified after six refinements (321 iterations); measured in radians it stays on one
+    branch."""
+    speed = 2.138
+    p = Problem("obstacle-avoidance")
+    x = p.state("x", bounds=(0.0, 2.0), initial=0.0, final=1.2)
+    y = p.state("y", bounds=(0.0, 2.0), initial=0.0, final=1.6)
+    theta = p.control("theta", bounds=(-10.0, 10.0))
+    p.dynamics({x: speed * ca.cos(theta), y: speed * ca.sin(theta)})
+    p.path_constraint("obstacle1", 0.1 - ((x - 0.4) ** 2 + (y - 0.5) ** 2))
+    p.path_constraint("obstacle2", 0.1 - ((x - 0.8) ** 2 + (y - 1.5) ** 2))
+    p.final_time(fixed=1.0)
+    p.minimize_integral((speed * ca.cos(theta)) ** 2 + (speed * ca.sin(theta)) ** 2, name="J")
+    p.transcription(30)
+    assert transcribe(p).control_scales == pytest.approx([1.0])
+    solution = p.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert solution.objective == pytest.approx(speed**2, rel=1e-6)
+    assert np.max(np.abs(np.diff(solution.nodes.columns["theta"]))) < 1.0  # one branch, no whole turns
+
+
 def test_a_state_of_unstated_size_is_scaled_by_what_its_rate_can_do():
     """Particle steering's y1 (no bound, boundary value 0) moves at y3, up to 45 on the straight-line guess, over the
     guessed 1 s; y4 at 100 sin(u) across the angle's range."""

@@ -139,6 +139,11 @@ class Transcription:
         """Each control's period, stated or recognized (:func:`~convexguid.ocp.periodic.control_periods`)."""
         return periodic.control_periods(self.problem)
 
+    @cached_property
+    def control_scales(self) -> np.ndarray:
+        """Each control's scale (:func:`~convexguid.ocp.periodic.control_scales`)."""
+        return periodic.control_scales(self.problem)
+
     def unwrapped(self, z: np.ndarray) -> np.ndarray:
         """``z`` with every periodic control's values (stated or recognized: :mod:`convexguid.ocp.periodic`) shifted
         by whole periods to within half a period of the value before them in time; the same point of the program."""
@@ -222,7 +227,7 @@ class Transcription:
                                   if p.constraints else None)
         # each path equality's magnitude: the change of its value when every state and control moves by its scale
         equalities = [c.expression for c in p.constraints if c.equality]
-        scales = ca.DM(np.concatenate([self.state_scales, [v.scale for v in p.controls]]))
+        scales = ca.DM(np.concatenate([self.state_scales, self.control_scales]))
         self.equality_magnitudes = (ca.Function("reach", [x, u, t], [ca.mtimes(ca.fabs(ca.jacobian(
             ca.vertcat(*equalities), ca.vertcat(x, u))), scales)]) if equalities else None)
         self.state_scale = ca.DM(self.state_scales)
@@ -354,9 +359,9 @@ class Transcription:
         return self.assemble(start + s * (end - start), values, p.tf_guess if self.free_time else p.tf)
 
     def variable_scale(self) -> np.ndarray:
-        p, N = self.problem, self.N
+        N = self.N
         states = self.state_scales
-        controls = np.array([v.scale for v in p.controls])
+        controls = self.control_scales
         per_axis = self.control_values_per_axis()
         parts = [np.tile(states, N + 1), np.tile(controls, per_axis)]
         if self.fuel:
