@@ -307,6 +307,8 @@ def test_penalty_below_the_multiplier_is_raised_until_exact(backend, monkeypatch
     assert raised == sorted(raised)
     # ... which near the feasible point may follow the multiplier down (to 1.5 times it), never to or below it
     assert all(rho > 2.0 for rho in penalties[len(raised):]), penalties
+    # the iteration table carries the weight each step was judged with: the first at the start's, the last above 2
+    assert result.history[0].penalty == pytest.approx(0.1) and result.history[-1].penalty > 2.0
 
 
 def test_the_curved_subproblems_multipliers_do_not_lower_the_penalty():

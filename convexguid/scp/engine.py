@@ -216,7 +216,8 @@ class SCPAlgorithm:
     def record(self, state: IterationState, step: float, ratio: float, accepted: bool,
                result: BackendResult) -> None:
         record = IterationRecord(state.iteration, state.objective, max_violation(state.ev), step, state.radius, ratio,
-                                 accepted, result.status, result.iterations, time.perf_counter() - state.started)
+                                 accepted, result.status, result.iterations, time.perf_counter() - state.started,
+                                 state.penalty)
         state.history.append(record)
         if self.log is not None:
             self.log(record)

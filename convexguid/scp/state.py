@@ -30,6 +30,8 @@ class IterationRecord:
     solver_status: str
     solver_iterations: int
     time_s: float
+    penalty: float = float("nan")
+    """The exact penalty's weight the step was judged with (phase 1 weighs the violation alone, by 1)."""
 
 
 @dataclass
