@@ -10,6 +10,7 @@ import io
 import multiprocessing
 import os
 import shutil
+import signal
 import threading
 import time
 from pathlib import Path
@@ -312,7 +313,16 @@ def test_forced_progress_prints_heartbeat_lines_with_the_stage(monkeypatch):
     assert "simulate x: simulation step 7/10 (70%)" in stream.getvalue()
 
 
-def test_ctrl_c_stops_the_work_at_its_next_report():
+@pytest.fixture
+def ctrl_c_reaches_python():
+    """Python's own SIGINT handler for the test. A process that a non-interactive shell starts in the background
+    inherits SIGINT ignored, and ``_thread.interrupt_main()`` then does nothing: the tests below waited forever."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_stops_the_work_at_its_next_report(ctrl_c_reaches_python):
     started, stopped = threading.Event(), threading.Event()
 
     def work():
@@ -334,7 +344,8 @@ def test_ctrl_c_stops_the_work_at_its_next_report():
     assert stopped.wait(progress.STOP_GRACE_S * 5), "the work kept running after Ctrl-C"
 
 
-def test_ctrl_c_during_a_simulation_exits_130_and_writes_nothing(monkeypatch, tmp_path, capsys):
+def test_ctrl_c_during_a_simulation_exits_130_and_writes_nothing(monkeypatch, tmp_path, capsys,
+                                                                  ctrl_c_reaches_python):
     from convexguid.families.potential_function import plant as reaction_wheel
 
     calls = []
@@ -362,7 +373,7 @@ def _slow_run(marker_dir: str) -> dict:
     return {}
 
 
-def test_ctrl_c_cancels_the_queued_monte_carlo_runs(monkeypatch, tmp_path):
+def test_ctrl_c_cancels_the_queued_monte_carlo_runs(monkeypatch, tmp_path, ctrl_c_reaches_python):
     from convexguid.families.lpmpc import solve as lpmpc_solve
 
     monkeypatch.setattr(lpmpc_solve, "_run_star", _slow_run)
