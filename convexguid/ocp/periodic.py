@@ -38,24 +38,24 @@ SAME = 1e-9
 """How close, relative to its size, every expression must stay after the turn."""
 
 
-def control_periods(problem: Problem) -> tuple[float | None, ...]:
-    """Each control's period: stated, :data:`TURN` when the control is unbounded and a turn of it changes nothing
-    the transcription evaluates (see the module docstring), else None."""
+def control_periods(problem: Problem, turning: list[int]) -> tuple[float | None, ...]:
+    """Each control's period: stated, :data:`TURN` when the control is unbounded and among the ``turning`` ones
+    (:func:`turning_controls`), else None."""
     stated = [v.period for v in problem.controls]
-    for j in turning_controls(problem):
+    for j in turning:
         if problem.controls[j].lower is None and problem.controls[j].upper is None:
             stated[j] = TURN
     return tuple(stated)
 
 
-def control_scales(problem: Problem) -> np.ndarray:
+def control_scales(problem: Problem, turning: list[int]) -> np.ndarray:
     """Each control's scale: as stated or estimated (:meth:`~convexguid.ocp.problem.Problem.control`), except that a
     bounded angle that a turn changes nothing of, bounded more than a turn wide, is measured in radians. Scaled by its
     bounds, the trust region let it jump by whole turns: the PROPT/PSOPT obstacle avoidance, a heading within
     [-10, 10] rad, held -4.47 and 0.82 at neighbouring nodes after eight iterations, and the flight between them
-    swept through every heading."""
+    swept through every heading. ``turning``: :func:`turning_controls`."""
     scales = np.array([v.scale for v in problem.controls], dtype=float)
-    for j in turning_controls(problem):
+    for j in turning:
         v = problem.controls[j]
         if v.scale_from != "stated" and v.lower is not None and v.upper is not None:
             scales[j] = min(scales[j], 1.0)

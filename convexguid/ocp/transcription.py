@@ -135,14 +135,19 @@ class Transcription:
         raise NotImplementedError
 
     @cached_property
+    def _turning_controls(self) -> list[int]:
+        """The controls a turn changes nothing of, tried once (:func:`~convexguid.ocp.periodic.turning_controls`)."""
+        return periodic.turning_controls(self.problem)
+
+    @cached_property
     def control_periods(self) -> tuple[float | None, ...]:
         """Each control's period, stated or recognized (:func:`~convexguid.ocp.periodic.control_periods`)."""
-        return periodic.control_periods(self.problem)
+        return periodic.control_periods(self.problem, self._turning_controls)
 
     @cached_property
     def control_scales(self) -> np.ndarray:
         """Each control's scale (:func:`~convexguid.ocp.periodic.control_scales`)."""
-        return periodic.control_scales(self.problem)
+        return periodic.control_scales(self.problem, self._turning_controls)
 
     def unwrapped(self, z: np.ndarray) -> np.ndarray:
         """``z`` with every periodic control's values (stated or recognized: :mod:`convexguid.ocp.periodic`) shifted
@@ -378,10 +383,8 @@ class Transcription:
     def _energy_rows(self) -> tuple[sp.coo_matrix, np.ndarray]:
         """Residual selection (every control value) and the quadrature's weights for them."""
         h = (self.problem.tf or 0.0) / self.N
-        columns = np.arange(self.control_start, self.slack_start)
-        select = sp.csr_matrix((np.ones(columns.size), (np.arange(columns.size), columns)),
-                               shape=(columns.size, self.num_variables))
-        return select.tocoo(), h * self._weights_per_step
+        select = linear_rows.selection(np.arange(self.control_start, self.slack_start), 1.0, self.num_variables)
+        return select, h * self._weights_per_step
 
     def residual_weights(self) -> np.ndarray:
         return self._energy_rows[1] if self.problem.objective == "energy" else np.zeros(0)

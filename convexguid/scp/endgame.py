@@ -64,7 +64,7 @@ def null_space_split(rows: np.ndarray) -> NullSpaceSplit:
     :data:`RANK_TOLERANCE` of the largest depend on the others (a quaternion's unit norm, kept by the dynamics, fixed
     at both ends) and are left out."""
     n = rows.shape[1]
-    norms = np.linalg.norm(rows, axis=1) if rows.shape[0] else np.zeros(0)
+    norms = np.linalg.norm(rows, axis=1)
     norms = np.where(norms > 0, norms, 1.0)
     if rows.shape[0] == 0:
         return NullSpaceSplit(np.zeros((n, 0)), np.eye(n), np.zeros((0, 0)), np.zeros(0, dtype=int), norms)
