@@ -536,3 +536,38 @@ def test_a_sum_of_squared_fit_residuals_started_at_zero_gets_a_scale_for_its_epi
     # both within their KKT tolerances of the optimum (1e-6 of the objective's unit)
     assert solution.objective == pytest.approx(solve_with_ipopt(transcribe(build())).objective, rel=1e-5)
     assert solution.iterations < 12
+
+
+def _speed_limited(unit: float) -> Problem:
+    """Rest to rest over 1 m in 1 s at least energy, the speed held to 1.2 m/s by ``unit * (v^2 - 1.2^2) <= 0``
+    (unconstrained, it peaks at 1.5 m/s): one constraint stated in any unit."""
+    p = Problem("speed-limited")
+    x, v = p.state("x", initial=0.0, final=1.0), p.state("v", initial=0.0, final=0.0)
+    u = p.control("u", bounds=(-20.0, 20.0))
+    p.dynamics({x: v, v: u})
+    p.path_constraint("speed", unit * (v * v - 1.2**2))
+    p.final_time(fixed=1.0)
+    p.minimize_integral(u * u)
+    p.transcription(20)
+    return p
+
+
+def test_a_path_constraint_is_solved_the_same_in_whatever_unit_it_is_stated():
+    """A path inequality's rows are divided by its magnitude (its change when the states and controls move by their
+    scales, to second order: the straight line is at rest, where v^2 has no slope), kept at most ten times stricter
+    than it. Left in their stated unit, the same limit took 9 iterations, 16 with four repair rounds times 1e8 (a
+    violation of 1e4 of its units drowned the merit) and ended unverified after 187 times 1e-6 (below the
+    feasibility tolerance everywhere)."""
+    solutions = {unit: _speed_limited(unit).solve() for unit in (1e-6, 1.0, 1e8)}
+    for solution in solutions.values():
+        assert solution.status == "converged" and not solution.repair_rounds[1:], solution.message
+        assert solution.objective == pytest.approx(solutions[1.0].objective, rel=1e-6)
+        assert solution.iterations <= 8
+    # times 1 and times 1e8, the rows are both ten times stricter than the magnitude: the same program
+    assert abs(solutions[1e8].iterations - solutions[1.0].iterations) <= 1
+    assert transcribe(_speed_limited(1e8)).path_magnitudes == pytest.approx(
+        1e8 * transcribe(_speed_limited(1.0)).path_magnitudes, rel=1e-12)
+    speed = np.abs(solutions[1.0].dense.columns["v"])
+    assert speed.max() <= 1.2 * (1 + 1e-6)
+    assert solutions[1.0].objective == pytest.approx(solve_with_ipopt(transcribe(_speed_limited(1.0))).objective,
+                                                     rel=1e-6)

@@ -193,18 +193,28 @@ class Problem:
             self.transitions[name] = value
 
     def path_constraint(self, name: str, expression: ca.SX, unit: str = "",
-                        during: tuple[float, float] | None = None, at_nodes: bool = True) -> None:
+                        during: tuple[float, float] | None = None, at_nodes: bool = True,
+                        scale: float | None = None) -> None:
         """``expression <= 0`` along the trajectory, or over the share ``during = (start, end)`` of it (0 to 1 of
         the final time); nonconvex allowed: the engine linearizes it. ``at_nodes=False`` imposes it between the
-        nodes only (Hermite-Simpson's midpoints), for a bound the nodes already hold as a hard state bound."""
+        nodes only (Hermite-Simpson's midpoints), for a bound the nodes already hold as a hard state bound.
+        ``scale`` is the constraint's magnitude (default: the change of its value when every state and control
+        moves by its own scale, the largest on the straight-line guess): its rows are judged, by the engine and by
+        the dense check, in the stricter of their stated unit and that magnitude, at most ten times stricter than
+        the magnitude (:meth:`Transcription._path_magnitudes
+        <convexguid.ocp.transcription.Transcription._path_magnitudes>`)."""
         where = f"{self.name}: path_constraint {name!r}"
         expression = self._scalar(where, name, expression)
+        magnitude = number(f"{where}: scale", scale)
+        if magnitude is not None and not magnitude > 0:
+            raise SpecError(f"{where}: scale: must be positive (got {scale!r})")
         window = (0.0, 1.0) if during is None else tuple(number(f"{where}: during", v, allow_none=False)
                                                           for v in during)
         if len(window) != 2 or not 0.0 <= window[0] < window[1] <= 1.0:
             raise SpecError(f"{where}: during: expected (start, end) with 0 <= start < end <= 1, shares of the final "
                             f"time (got {during!r})")
-        self.constraints.append(PathConstraint(name, expression, unit, window, at_nodes=bool(at_nodes)))
+        self.constraints.append(PathConstraint(name, expression, unit, window, at_nodes=bool(at_nodes),
+                                               scale=magnitude))
 
     def path_equality(self, name: str, expression: ca.SX, unit: str = "",
                       during: tuple[float, float] | None = None, at_midpoints: bool | None = None) -> None:

@@ -301,22 +301,25 @@ def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_s
     error = np.array([quat_multiply(quat_conjugate(case.qf), e)[:3] for e in np.eye(4)]).T
     p.boundary_constraint("final_attitude", ca.mtimes(ca.DM(error), ca.vertcat(*q)), at="final")
     attitude = ca.vertcat(*q)
+    # the rows below in their own units (cosines, shares of rate_max): tightened() states its margins in them
     for cone in case.cones:
         cosine = cone_cosine_expression(attitude, cone)
         if cone.keep_out:
-            p.path_constraint(f"{cone.kind}_{cone.name}", cosine - np.cos(cone.half_angle_rad), "cos")
+            p.path_constraint(f"{cone.kind}_{cone.name}", cosine - np.cos(cone.half_angle_rad), "cos", scale=1.0)
         else:
-            p.path_constraint(f"{cone.kind}_{cone.name}", np.cos(cone.half_angle_rad) - cosine, "cos")
+            p.path_constraint(f"{cone.kind}_{cone.name}", np.cos(cone.half_angle_rad) - cosine, "cos", scale=1.0)
     for fb in case.forbidden:
         # linear in q, but penalized like the cones: a guess may pass through the forbidden attitude
         bound = np.cos(fb.min_angle / 2)
         dot = ca.dot(ca.DM(fb.q), attitude)
-        p.path_constraint(f"forbidden_{fb.name}", dot - bound, "cos")
-        p.path_constraint(f"forbidden_{fb.name}_opposite", -dot - bound, "cos")
+        p.path_constraint(f"forbidden_{fb.name}", dot - bound, "cos", scale=1.0)
+        p.path_constraint(f"forbidden_{fb.name}_opposite", -dot - bound, "cos", scale=1.0)
     if case.rate_max is not None:  # the nodes hold the rate box hard; the midpoints as penalized rows
         for i, rate in enumerate(w):
-            p.path_constraint(f"rate_{i + 1}_max", rate / case.rate_max - 1.0, "of rate_max", at_nodes=False)
-            p.path_constraint(f"rate_{i + 1}_min", -rate / case.rate_max - 1.0, "of rate_max", at_nodes=False)
+            p.path_constraint(f"rate_{i + 1}_max", rate / case.rate_max - 1.0, "of rate_max", at_nodes=False,
+                              scale=1.0)
+            p.path_constraint(f"rate_{i + 1}_min", -rate / case.rate_max - 1.0, "of rate_max", at_nodes=False,
+                              scale=1.0)
     if case.tf is None:
         p.final_time(bounds=(1e-3 * tf_guess, None), guess=tf_guess)
         p.minimize_time()
