@@ -571,3 +571,30 @@ def test_a_path_constraint_is_solved_the_same_in_whatever_unit_it_is_stated():
     assert speed.max() <= 1.2 * (1 + 1e-6)
     assert solutions[1.0].objective == pytest.approx(solve_with_ipopt(transcribe(_speed_limited(1.0))).objective,
                                                      rel=1e-6)
+
+
+def _bead(unit: float) -> Problem:
+    """A point pushed through 1 rad of the unit circle in 1 s, from rest to rest, at least energy, kept on the circle
+    by ``unit * (x ux + y uy + vx^2 + vy^2) == 0`` (the radius's second derivative) from a start on it."""
+    p = Problem("bead")
+    x, y = p.state("x", initial=1.0, final=math.cos(1.0)), p.state("y", initial=0.0, final=math.sin(1.0))
+    vx, vy = p.state("vx", initial=0.0, final=0.0), p.state("vy", initial=0.0, final=0.0)
+    ux, uy = p.control("ux"), p.control("uy")
+    p.dynamics({x: vx, y: vy, vx: ux, vy: uy})
+    p.path_equality("on_circle", unit * (ux * x + uy * y + vx**2 + vy**2))
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(20)
+    return p
+
+
+def test_a_path_equality_is_solved_the_same_in_whatever_unit_it_is_stated():
+    """A path equality's rows are divided as an inequality's are. Left in their stated unit, the bead's equality ended
+    max_iterations times 1e-6 (its violation under the tolerance, the plan off the circle) and unverified times 1e8
+    (phase 1 stalled with the defects at 0.05)."""
+    solutions = [_bead(unit).solve() for unit in (1e-6, 1.0, 1e8)]
+    for solution in solutions:
+        assert solution.status == "converged", solution.message
+        assert solution.objective == pytest.approx(solutions[1].objective, rel=1e-6)
+    radius = np.hypot(solutions[1].dense.columns["x"], solutions[1].dense.columns["y"])
+    assert np.max(np.abs(radius - 1.0)) < 1e-4

@@ -217,7 +217,8 @@ class Problem:
                                                scale=magnitude))
 
     def path_equality(self, name: str, expression: ca.SX, unit: str = "",
-                      during: tuple[float, float] | None = None, at_midpoints: bool | None = None) -> None:
+                      during: tuple[float, float] | None = None, at_midpoints: bool | None = None,
+                      scale: float | None = None) -> None:
         """``expression == 0`` along the trajectory (or the share ``during`` of it), e.g. a thrust of fixed
         magnitude; nonconvex allowed (the engine linearizes it). The dense check judges ``|expression|`` between
         the nodes in its magnitude (its largest change on the flown track when every state and control moves by
@@ -225,8 +226,9 @@ class Problem:
         equality of the states alone (a singular arc's condition) holds at the nodes: at Hermite-Simpson's
         midpoints too it would fix more values than the collocation leaves free. ``at_midpoints`` says it
         otherwise (False: at the nodes only, e.g. a unit thrust direction whose midpoint value is the mean of its
-        node values, as Wang & Tang's arcs hold it)."""
-        self.path_constraint(name, expression, unit, during)
+        node values, as Wang & Tang's arcs hold it). Its rows are divided as an inequality's are (``scale``:
+        :meth:`path_constraint`)."""
+        self.path_constraint(name, expression, unit, during, scale=scale)
         if at_midpoints is None:
             at_midpoints = ca.depends_on(self.constraints[-1].expression, self.control_vector())
         self.constraints[-1] = replace(self.constraints[-1], equality=True, at_midpoints=bool(at_midpoints))

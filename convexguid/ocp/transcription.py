@@ -266,7 +266,7 @@ class Transcription:
                     continue
                 if c.equality:
                     self.equality_rows.append((kind, k, j))
-                    equalities.append(g[j](state, control, time))
+                    equalities.append(g[j](state, control, time) / self.path_magnitudes[j])
                 elif c.cone is None:
                     self.path_rows.append((kind, k, j))
                     constraints.append(g[j](state, control, time) / self.path_magnitudes[j])
@@ -312,7 +312,7 @@ class Transcription:
         self._objective_epigraph, self._epigraph_pattern = functions["epigraph"], patterns["epigraph"]
 
     def _path_magnitudes(self, x: ca.SX, u: ca.SX, t: ca.SX) -> np.ndarray:
-        """What each path constraint's rows are divided by (1 for an equality or a cone, judged in their own): its
+        """What each path constraint's and equality's rows are divided by (1 for a cone, divided by its own): its
         stated scale, else from its magnitude :math:`m`, the largest change of its value when every state and
         control moves by its own scale, to second order (:math:`|\\nabla g|^T \\sigma + \\tfrac12 \\sigma^T
         |\\nabla^2 g| \\sigma`: a speed limit :math:`v^2 - v_{max}^2` has one where the straight line is at rest),
@@ -324,7 +324,7 @@ class Transcription:
         (docs/ocp.md, 'Units of a constraint')."""
         p = self.problem
         magnitudes = np.array([c.scale or 1.0 for c in p.constraints])
-        estimated = [j for j, c in enumerate(p.constraints) if not c.equality and c.cone is None and c.scale is None]
+        estimated = [j for j, c in enumerate(p.constraints) if c.cone is None and c.scale is None]
         if not estimated:
             return magnitudes
         variables, scales = ca.vertcat(x, u), ca.DM(np.concatenate([self.state_scales, self.control_scales]))

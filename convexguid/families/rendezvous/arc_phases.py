@@ -93,7 +93,7 @@ def arc_problem(case: Rendezvous, name: str, burn: bool, subintervals: int, init
     if burn:  # eq. (2) under full thrust along U, |U| = 1 at the nodes (eq. 11), Hermite-Simpson (eqs. 5-8)
         u = ca.vertcat(*(p.control(f"u{axis}", scale=1.0) for axis in AXES[:d]))
         rates += ca.mtimes(ca.sparsify(ca.DM(B)), u)
-        p.path_equality("unit_thrust_direction", ca.sumsqr(u) - 1, at_midpoints=False)
+        p.path_equality("unit_thrust_direction", ca.sumsqr(u) - 1, at_midpoints=False, scale=1.0)
         p.minimize_time()
         p.transcription(subintervals, control="linear")
     else:  # the free motion in closed form (eq. 9), exact across one interval
