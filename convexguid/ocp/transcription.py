@@ -56,7 +56,8 @@ STRICTEST = 10.0
 _path_magnitudes``). Measured on Betts' space station (a momentum limit of magnitude 1.1e9): divided down to 1, 39
 iterations; to 10, 54; to 100, 113. Down to 1, the PROPT obstacle avoidance (magnitude 16,
 a path of fixed length threading two circles) ended unverified on 5 of 8 grids and perturbations; at 10, 1 of 8, as
-in its own unit."""
+in its own unit. No one value suits every statement: at 10 the docking cone of examples/cw_docking.py, in m^2
+(magnitude 4374), takes 22 iterations where its stated unit took 14."""
 
 
 @dataclass(frozen=True)
