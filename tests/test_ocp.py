@@ -213,6 +213,9 @@ def test_a_keep_out_circle_is_respected_between_the_nodes_and_the_optimum_is_ipo
     (lambda p: p.final_time(bounds=(2.0, 1.0)), r"^demo: final_time: bounds: expected 0 < lower < upper"),
     (lambda p: p.path_constraint("c", ca.SX.sym("a", 2)), r"^demo: path_constraint 'c': expected a scalar"),
     (lambda p: p.transcription(1), r"^demo: transcription: intervals: expected an integer >= 2"),
+    (lambda p: p.path_constraint("c", p.state("x"), scale=0.0), r"^demo: path_constraint 'c': scale: must be positive"),
+    (lambda p: p.point_equality("e", p.state("x"), at=1.0, scale="big"),
+     r"^demo: point_equality 'e': scale: expected a finite number"),
 ])
 def test_a_wrong_statement_is_one_line_naming_it(statement, message):
     with pytest.raises(SpecError, match=message) as error:

@@ -82,6 +82,14 @@ class PathConstraint:
         return self.during[0] - 1e-12 <= share <= self.during[1] + 1e-12
 
 
+def positive_scale(where: str, value: object) -> float | None:
+    """A stated constraint magnitude (``scale=``): None, or a positive number; else one line naming ``where``."""
+    scale = number(f"{where}: scale", value)
+    if scale is not None and not scale > 0:
+        raise SpecError(f"{where}: scale: must be positive (got {value!r})")
+    return scale
+
+
 def number(where: str, value: object, allow_none: bool = True) -> float | None:
     """``value`` as a float; one line naming ``where`` when it is not a finite number (None passes if allowed)."""
     if value is None and allow_none:

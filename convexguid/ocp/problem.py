@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from convexguid.errors import SpecError
-from convexguid.ocp.declarations import PathConstraint, Variable, number, point_kind
+from convexguid.ocp.declarations import PathConstraint, Variable, number, point_kind, positive_scale
 from convexguid.ocp.scaling import estimated_scales
 from convexguid.ocp.size import check_problem_size
 
@@ -205,9 +205,7 @@ class Problem:
         <convexguid.ocp.transcription.Transcription._path_magnitudes>`)."""
         where = f"{self.name}: path_constraint {name!r}"
         expression = self._scalar(where, name, expression)
-        magnitude = number(f"{where}: scale", scale)
-        if magnitude is not None and not magnitude > 0:
-            raise SpecError(f"{where}: scale: must be positive (got {scale!r})")
+        magnitude = positive_scale(where, scale)
         window = (0.0, 1.0) if during is None else tuple(number(f"{where}: during", v, allow_none=False)
                                                           for v in during)
         if len(window) != 2 or not 0.0 <= window[0] < window[1] <= 1.0:
@@ -321,24 +319,29 @@ class Problem:
                             f"(nodes, {shapes[1][0]}) controls (got {states.shape} and {controls.shape})")
         self.guess_nodes = (states, controls)
 
-    def point_constraint(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
-        """``expression <= 0`` at the instant ``at`` (a share of the final time, on a node of the grid)."""
-        self._point(name, expression, at, unit, equality=False)
+    def point_constraint(self, name: str, expression: ca.SX, at: float, unit: str = "",
+                         scale: float | None = None) -> None:
+        """``expression <= 0`` at the instant ``at`` (a share of the final time, on a node of the grid); ``scale``
+        as for :meth:`path_constraint`."""
+        self._point(name, expression, at, unit, equality=False, scale=scale)
 
-    def point_equality(self, name: str, expression: ca.SX, at: float, unit: str = "") -> None:
+    def point_equality(self, name: str, expression: ca.SX, at: float, unit: str = "",
+                       scale: float | None = None) -> None:
         """``expression == 0`` at the instant ``at`` (a share of the final time, on a node of the grid), e.g. a
         control that must be zero as the maneuver ends (``at=1.0``). Linearized like the dynamics and never
-        tightened by a repair; for the states alone at either end, :meth:`boundary_constraint` says it."""
-        self._point(name, expression, at, unit, equality=True)
+        tightened by a repair; for the states alone at either end, :meth:`boundary_constraint` says it. ``scale``
+        as for :meth:`path_constraint`."""
+        self._point(name, expression, at, unit, equality=True, scale=scale)
 
-    def _point(self, name: str, expression: ca.SX, at: float, unit: str, equality: bool) -> None:
+    def _point(self, name: str, expression: ca.SX, at: float, unit: str, equality: bool,
+               scale: float | None) -> None:
         where = f"{self.name}: {point_kind(equality)} {name!r}"
         expression = self._scalar(where, name, expression)
         share = number(f"{where}: at", at, allow_none=False)
         if not 0.0 <= share <= 1.0:
             raise SpecError(f"{where}: at: expected a share of the final time in [0, 1] (got {at!r})")
         self.constraints.append(PathConstraint(name, expression, unit, at=share, equality=equality,
-                                               at_midpoints=not equality))
+                                               at_midpoints=not equality, scale=positive_scale(where, scale)))
 
     def _scalar(self, where: str, name: str, expression) -> ca.SX:
         expression = ca.SX(expression)
