@@ -568,8 +568,8 @@ def test_a_path_constraint_is_solved_the_same_in_whatever_unit_it_is_stated():
         assert solution.iterations <= 8
     # times 1 and times 1e8, the rows are both ten times stricter than the magnitude: the same program
     assert abs(solutions[1e8].iterations - solutions[1.0].iterations) <= 1
-    assert transcribe(_speed_limited(1e8)).path_magnitudes == pytest.approx(
-        1e8 * transcribe(_speed_limited(1.0)).path_magnitudes, rel=1e-12)
+    assert transcribe(_speed_limited(1e8)).path_divisors == pytest.approx(
+        1e8 * transcribe(_speed_limited(1.0)).path_divisors, rel=1e-12)
     speed = np.abs(solutions[1.0].dense.columns["v"])
     assert speed.max() <= 1.2 * (1 + 1e-6)
     assert solutions[1.0].objective == pytest.approx(solve_with_ipopt(transcribe(_speed_limited(1.0))).objective,

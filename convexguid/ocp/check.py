@@ -345,7 +345,7 @@ class DenseChecker:
                 inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None
                           else (share >= c.during[0] - 1e-12) & (share <= c.during[1] + 1e-12))
                 excess = (np.abs(values[:, j]) / magnitude[j] if c.equality
-                          else values[:, j] / program.path_magnitudes[j])
+                          else values[:, j] / program.path_divisors[j])
                 out[("path", j)] = np.where(inside & c.judged, excess, -np.inf)
         for i, v in enumerate(p.states):
             if v.upper is not None:

@@ -67,8 +67,8 @@ class PathConstraint:
     """For a second-order cone ``||vector|| <= bound``: ``(bound, vector)``, affine in states and controls (kept
     exact in every subproblem); ``expression`` is then ``||vector|| - bound``, what the dense check evaluates."""
     scale: float | None = None
-    """The stated magnitude (None: estimated, :attr:`Transcription.path_magnitudes
-    <convexguid.ocp.transcription.Transcription.path_magnitudes>`); its rows are divided by it."""
+    """The stated magnitude (None: estimated); what its rows are divided by follows from it
+    (:func:`~convexguid.ocp.constraint_units.path_divisors`)."""
     judged: bool = True
     """False: held by the transcription, not judged by the dense check (an end's rate condition, implied by a bound
     the check judges itself: :mod:`convexguid.ocp.pinned`)."""

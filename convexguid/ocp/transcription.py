@@ -36,6 +36,7 @@ import scipy.sparse as sp
 
 from convexguid.ocp import linear_rows, periodic
 from convexguid.ocp.boundary import nonlinear_equalities
+from convexguid.ocp.constraint_units import path_divisors
 from convexguid.ocp.curvature import ElementCurvature, interval_of_rows
 from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.guess import flown_free_states
@@ -46,18 +47,6 @@ from convexguid.scp.problem import ConstraintBlock, CurvatureModel, Evaluation, 
 
 if TYPE_CHECKING:  # the problem module imports this one when it solves
     from convexguid.ocp.problem import Problem
-
-MAGNITUDE_SAMPLES = 21
-"""Instants of the straight-line guess a path inequality's magnitude is estimated over (``Transcription.
-_path_magnitudes``): evenly spaced, the same on every grid, so a refined program judges it in the same unit."""
-
-STRICTEST = 10.0
-"""How many times stricter than its magnitude a path inequality's rows may be judged (``Transcription.
-_path_magnitudes``). Measured on Betts' space station (a momentum limit of magnitude 1.1e9): divided down to 1, 39
-iterations; to 10, 54; to 100, 113. Down to 1, the PROPT obstacle avoidance (magnitude 16,
-a path of fixed length threading two circles) ended unverified on 5 of 8 grids and perturbations; at 10, 1 of 8, as
-in its own unit. No one value suits every statement: at 10 the docking cone of examples/cw_docking.py, in m^2
-(magnitude 4374), takes 22 iterations where its stated unit took 14."""
 
 
 @dataclass(frozen=True)
@@ -248,7 +237,8 @@ class Transcription:
         self.equality_magnitudes = (ca.Function("reach", [x, u, t], [ca.mtimes(ca.fabs(ca.jacobian(
             ca.vertcat(*equalities), ca.vertcat(x, u))), scales)]) if equalities else None)
         self.state_scale = ca.DM(self.state_scales)
-        self.path_magnitudes = self._path_magnitudes(x, u, t)
+        self.path_divisors = path_divisors(p, x, u, t, np.concatenate([self.state_scales, self.control_scales]),
+                                             p.tf_guess if self.free_time else p.tf)
         g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
         self.path_rows: list[tuple[str, int, int]] = []  # (node or mid, index, constraint) of each path row
         self.cone_rows: list[tuple[str, int, int]] = []  # the same for each stated cone where it holds
@@ -267,10 +257,10 @@ class Transcription:
                     continue
                 if c.equality:
                     self.equality_rows.append((kind, k, j))
-                    equalities.append(g[j](state, control, time) / self.path_magnitudes[j])
+                    equalities.append(g[j](state, control, time) / self.path_divisors[j])
                 elif c.cone is None:
                     self.path_rows.append((kind, k, j))
-                    constraints.append(g[j](state, control, time) / self.path_magnitudes[j])
+                    constraints.append(g[j](state, control, time) / self.path_divisors[j])
                 elif kind == "node" or j in control_cones:  # affine in a node's values (a midpoint state is not)
                     self.cone_rows.append((kind, k, j))
                     cones.append(cone_maps[j](state, control))
@@ -311,37 +301,6 @@ class Transcription:
         self._path_equalities, self._path_equality_pattern = functions["path_equalities"], patterns["path_equalities"]
         self._boundary_equalities, self._boundary_pattern = functions["boundary"], patterns["boundary"]
         self._objective_epigraph, self._epigraph_pattern = functions["epigraph"], patterns["epigraph"]
-
-    def _path_magnitudes(self, x: ca.SX, u: ca.SX, t: ca.SX) -> np.ndarray:
-        """What each path constraint's and equality's rows are divided by (1 for a cone, divided by its own): its
-        stated scale, else from its magnitude :math:`m`, the largest change of its value when every state and
-        control moves by its own scale, to second order (:math:`|\\nabla g|^T \\sigma + \\tfrac12 \\sigma^T
-        |\\nabla^2 g| \\sigma`: a speed limit :math:`v^2 - v_{max}^2` has one where the straight line is at rest),
-        over :data:`MAGNITUDE_SAMPLES` instants of the straight-line guess (the same on every grid; 1 where nothing
-        moves it). The divisor :math:`\\max(\\min(m, 1), m / S)`, :math:`S` = :data:`STRICTEST`, judges the rows
-        in the stricter of their own unit and their magnitude, never more than :math:`S` times stricter than the
-        magnitude: a limit stated in tiny units is not lost under the feasibility tolerance, one in huge units
-        (a momentum limit in (ft lbf s)^2, 1e9) does not drown the merit, and a well-scaled one is left as stated
-        (docs/ocp.md, 'Units of a constraint')."""
-        p = self.problem
-        magnitudes = np.array([c.scale or 1.0 for c in p.constraints])
-        estimated = [j for j, c in enumerate(p.constraints) if c.cone is None and c.scale is None]
-        if not estimated:
-            return magnitudes
-        variables, scales = ca.vertcat(x, u), ca.DM(np.concatenate([self.state_scales, self.control_scales]))
-        changes = [ca.dot(ca.fabs(ca.gradient(g, variables)), scales)
-                   + 0.5 * ca.dot(scales, ca.mtimes(ca.fabs(ca.hessian(g, variables)[0]), scales))
-                   for g in (p.constraints[j].expression for j in estimated)]
-        reach = ca.Function("reach", [x, u, t], [ca.vertcat(*changes)])
-        start, end, control = p.straight_line()
-        tf = p.tf_guess if self.free_time else p.tf
-        shares = np.linspace(0.0, 1.0, MAGNITUDE_SAMPLES)
-        values = np.array([np.asarray(reach(start + s * (end - start), control, s * tf), dtype=float).ravel()
-                           for s in shares])
-        largest = np.max(np.where(np.isfinite(values), values, 0.0), axis=0)
-        largest = np.where(largest > 0, largest, 1.0)
-        magnitudes[estimated] = np.maximum(np.minimum(largest, 1.0), largest / STRICTEST)
-        return magnitudes
 
     def _build_cones(self, z: ca.SX, V: ca.SX, stated: list) -> None:
         """The stated cones at their nodes, then (2-norm fuel) ``||v_j|| <= s_j`` for every control value, as one
