@@ -5,7 +5,7 @@ states' scales and the cones and nonlinear boundary conditions in their magnitud
 momentum limit as :math:`h \\cdot h - 10^8 \\le 0` in (ft lbf s)^2: a violation of 1e4 of that unit outweighed
 everything else in the :math:`\\ell_1` merit, the step ratios came out near -1e10, and the badly scaled subproblems
 failed (``solver_error``); a limit written in millionths of its unit was met by anything under the feasibility
-tolerance. So each path inequality, path equality and point constraint is divided by :func:`path_divisors`
+tolerance. So each path inequality, path equality and point constraint is divided by :func:`constraint_divisors`
 (docs/ocp.md, 'Units of a constraint').
 """
 
@@ -31,7 +31,7 @@ perturbations; at 10, 1 of 8, as in its own unit. No one value suits every state
 examples/cw_docking.py, in m^2 (magnitude 4374), takes 22 iterations where its stated unit took 14."""
 
 
-def path_divisors(problem: Problem, x: ca.SX, u: ca.SX, t: ca.SX, scales: np.ndarray, tf: float) -> np.ndarray:
+def constraint_divisors(problem: Problem, x: ca.SX, u: ca.SX, t: ca.SX, scales: np.ndarray, tf: float) -> np.ndarray:
     """What each of ``problem.constraints`` is divided by (1 for a cone, divided by its own magnitude elsewhere),
     from its magnitude :math:`m`: the stated ``scale``, else the largest change of its value when every state and
     control (symbols ``x``, ``u``; time ``t``) moves by its own scale (``scales``, states then controls), to second
@@ -56,5 +56,5 @@ def path_divisors(problem: Problem, x: ca.SX, u: ca.SX, t: ca.SX, scales: np.nda
                            for s in np.linspace(0.0, 1.0, MAGNITUDE_SAMPLES)])
         largest = np.max(np.where(np.isfinite(values), values, 0.0), axis=0)
         magnitudes[estimated] = np.where(largest > 0, largest, 1.0)
-    divisors = np.maximum(np.minimum(magnitudes, 1.0), magnitudes / STRICTEST)
-    return np.where([c.cone is None for c in constraints], divisors, 1.0) if constraints else divisors
+    # a cone's magnitude stays 1 here (its own division is the cone block's): so does its divisor
+    return np.maximum(np.minimum(magnitudes, 1.0), magnitudes / STRICTEST)

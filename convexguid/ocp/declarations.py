@@ -68,7 +68,7 @@ class PathConstraint:
     exact in every subproblem); ``expression`` is then ``||vector|| - bound``, what the dense check evaluates."""
     scale: float | None = None
     """The stated magnitude (None: estimated); what its rows are divided by follows from it
-    (:func:`~convexguid.ocp.constraint_units.path_divisors`)."""
+    (:func:`~convexguid.ocp.constraint_units.constraint_divisors`)."""
     judged: bool = True
     """False: held by the transcription, not judged by the dense check (an end's rate condition, implied by a bound
     the check judges itself: :mod:`convexguid.ocp.pinned`)."""

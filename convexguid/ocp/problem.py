@@ -201,7 +201,7 @@ class Problem:
         ``scale`` is the constraint's magnitude (default: the change of its value when every state and control
         moves by its own scale, the largest on the straight-line guess): its rows are judged, by the engine and by
         the dense check, in the stricter of their stated unit and that magnitude, at most ten times stricter than
-        the magnitude (:func:`~convexguid.ocp.constraint_units.path_divisors`)."""
+        the magnitude (:func:`~convexguid.ocp.constraint_units.constraint_divisors`)."""
         where = f"{self.name}: path_constraint {name!r}"
         expression = self._scalar(where, name, expression)
         magnitude = positive_scale(where, scale)

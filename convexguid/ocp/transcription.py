@@ -36,7 +36,7 @@ import scipy.sparse as sp
 
 from convexguid.ocp import linear_rows, periodic
 from convexguid.ocp.boundary import nonlinear_equalities
-from convexguid.ocp.constraint_units import path_divisors
+from convexguid.ocp.constraint_units import constraint_divisors
 from convexguid.ocp.curvature import ElementCurvature, interval_of_rows
 from convexguid.ocp.element_hessian import ElementHessian, element_hessian
 from convexguid.ocp.guess import flown_free_states
@@ -233,12 +233,12 @@ class Transcription:
                                   if p.constraints else None)
         # each path equality's magnitude: the change of its value when every state and control moves by its scale
         equalities = [c.expression for c in p.constraints if c.equality]
-        scales = ca.DM(np.concatenate([self.state_scales, self.control_scales]))
+        scales = np.concatenate([self.state_scales, self.control_scales])
         self.equality_magnitudes = (ca.Function("reach", [x, u, t], [ca.mtimes(ca.fabs(ca.jacobian(
-            ca.vertcat(*equalities), ca.vertcat(x, u))), scales)]) if equalities else None)
+            ca.vertcat(*equalities), ca.vertcat(x, u))), ca.DM(scales))]) if equalities else None)
         self.state_scale = ca.DM(self.state_scales)
-        self.path_divisors = path_divisors(p, x, u, t, np.concatenate([self.state_scales, self.control_scales]),
-                                             p.tf_guess if self.free_time else p.tf)
+        # what each path constraint's rows are divided by (the dense check judges its excess in the same unit)
+        self.path_divisors = constraint_divisors(p, x, u, t, scales, p.tf_guess if self.free_time else p.tf)
         g = [ca.Function(f"g_{j}", [x, u, t], [c.expression]) for j, c in enumerate(p.constraints)]
         self.path_rows: list[tuple[str, int, int]] = []  # (node or mid, index, constraint) of each path row
         self.cone_rows: list[tuple[str, int, int]] = []  # the same for each stated cone where it holds
