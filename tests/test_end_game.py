@@ -118,6 +118,16 @@ def test_the_newton_step_is_regularized_where_the_reduced_hessian_is_indefinite(
     assert newton.shift == 0.0 and newton.negative_direction is None and np.allclose(newton.step, [-0.25, 0.25])
 
 
+def test_a_newton_step_without_any_curvature_is_a_finite_step_down_the_gradient():
+    """A linear objective on one linear row has a zero reduced Hessian: the step was 0/0 (NaN) and the solve of
+    the speed-limited dash (tests/test_ocp_refine.py) crashed. It is now the regularized step of unit size down the
+    reduced gradient, on the row."""
+    rows, values, gradient = np.array([[1.0, 1.0]]), np.zeros(1), np.array([2.0, 0.0])
+    step = newton_step(gradient, np.zeros((2, 2)), rows, values)
+    assert np.all(np.isfinite(step.step)) and step.shift > 0 and abs(rows @ step.step) < 1e-14
+    assert np.allclose(step.step, [-np.sqrt(0.5), np.sqrt(0.5)])  # unit length along the row's null space
+
+
 def test_rows_of_very_different_units_are_all_kept_in_the_working_set():
     """A boundary value's row in a state scaled by 4e7 beside two unit rows: judged by its pivots before the rows
     were equilibrated, the unit rows fell below 1e-6 of the largest and were left out as dependent, and the step broke

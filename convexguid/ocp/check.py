@@ -256,6 +256,10 @@ class DenseChecker:
                     nodes = [node for node in (k, k + 1) if not fixed.get(node)]
                     entries = [node * nx + state for node in nodes]
                     bounds[entries] = np.maximum(bounds[entries], margin)
+                    # and its row between the nodes, where the transcription holds one (in that row's divided unit)
+                    for r, (point, i, j) in enumerate(program.path_rows):
+                        if point == "mid" and i == k and p.constraints[j].holds_bound == index:
+                            path[r] = max(path[r], margin / program.path_divisors[j])
         old = program.margins
         if not any(np.any(added > 0) for added in (path, bounds, cone)):
             # nothing to tighten: a broken path equality asks for a finer grid; anything else stays broken

@@ -72,6 +72,9 @@ class PathConstraint:
     judged: bool = True
     """False: held by the transcription, not judged by the dense check (an end's rate condition, implied by a bound
     the check judges itself: :mod:`convexguid.ocp.pinned`)."""
+    holds_bound: tuple[int, bool] | None = None
+    """``(state, upper)``: the row holds that state's upper (else lower) bound between the nodes, where the nodes hold
+    it hard (:func:`~convexguid.ocp.hermite_simpson.with_bounds_between_nodes`); a repair of the bound tightens it."""
 
     def applies(self, share: float, node: bool) -> bool:
         """Whether the constraint is imposed at the point ``share`` of the maneuver (a node or a midpoint)."""

@@ -31,8 +31,35 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from convexguid.ocp.declarations import PathConstraint
 from convexguid.ocp.mesh import checked_shares, is_uniform, require_point_constraints_on_nodes, split_shares
 from convexguid.ocp.transcription import Symbols, Transcription
+
+
+def with_bounds_between_nodes(problem):
+    """``problem`` with each finite bound of a state that has dynamics also held at the interval midpoints: a path
+    row ``x - upper <= 0`` (or ``lower - x <= 0``) imposed between the nodes only (``holds_bound``; not judged by the
+    dense check, which judges the bound itself). The midpoint state :math:`x_{k+1/2}` is a point of the collocated
+    trajectory, but the nodes alone hold the bound hard, and an optimum may ride above it there: on the abort landing
+    in windshear (Bulirsch, Montrone & Pesch, JOTA 70, 1991) the angle of attack sat on its bound with its rate
+    chattering node to node, the cubic above the bound between them, and six repair rounds left the plan
+    ``unverified``; with the midpoint rows it converged and verified (docs/ocp.md, 'Bounds between the nodes').
+    The same problem when it holds them already."""
+    held = {c.holds_bound for c in problem.constraints}
+    added = []
+    for i, v in enumerate(problem.states):
+        if v.name in problem.parameter_names:
+            continue  # constant: its midpoint value is its node value
+        for upper, bound in ((True, v.upper), (False, v.lower)):
+            if bound is not None and (i, upper) not in held:
+                added.append(PathConstraint(f"{v.name}_{'max' if upper else 'min'}_between_nodes",
+                                            v.symbol - bound if upper else bound - v.symbol, v.unit, at_nodes=False,
+                                            judged=False, holds_bound=(i, upper)))
+    if not added:
+        return problem
+    stated = copy.copy(problem)
+    stated.constraints = [*problem.constraints, *added]
+    return stated
 
 
 def quadratic_weights(s: float) -> tuple[float, float, float]:
@@ -59,6 +86,7 @@ class HermiteSimpsonProgram(Transcription):
             if not is_uniform(shares):
                 require_point_constraints_on_nodes(problem, shares, f"{intervals}-interval grid")
                 self.uneven_shares = shares
+        problem = with_bounds_between_nodes(problem)
         self.split_from: tuple[np.ndarray, np.ndarray] | None = None
         """Each interval's parent's local error and the pieces the parent was split into, on a refined grid."""
         super().__init__(problem, margins, intervals)

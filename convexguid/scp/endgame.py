@@ -105,7 +105,10 @@ def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, val
             direction = Z @ vectors[:, 0]
             direction = direction / np.max(np.abs(direction))
             direction = direction * np.sign(direction[np.argmax(np.abs(direction))])
-            shift = -smallest + max(REGULARIZATION * -smallest, RANK_TOLERANCE * abs(eigenvalues[-1]))
+            floor = RANK_TOLERANCE * abs(eigenvalues[-1])
+            if floor == 0.0:  # no curvature at all in the null space: a step of unit size (scaled) down the gradient
+                floor = max(float(np.max(np.abs(right))), 1.0)
+            shift = -smallest + max(REGULARIZATION * -smallest, floor)
             null = vectors @ ((vectors.T @ right) / (eigenvalues + shift))
         step = range_step + Z @ null
     multipliers = np.zeros(rows.shape[0])

@@ -247,8 +247,8 @@ def tightened(slew: Slew, case: AttitudeCase, margin: float) -> Slew:
     symbolic build, its derivatives and the Hessian shared, not built again). Each row's margin is what moves its
     bound there: :math:`\\cos\\theta - \\cos(\\theta + m)` for a keep-out cone, :math:`\\cos(\\alpha - m) -
     \\cos\\alpha` for a keep-in cone, :math:`\\cos(\\theta_m/2) - \\cos((\\theta_m + m)/2)` for a forbidden
-    attitude, the rate bound's decrease over the stated bound for a midpoint rate row and the decrease itself for
-    the node rate box."""
+    attitude, and the rate bound's decrease for the rate box, at the nodes and between them (the rows
+    :func:`~convexguid.ocp.hermite_simpson.with_bounds_between_nodes` adds), each divided as its rows are."""
     base, program = slew.case, slew.program
     if slew.margin:
         raise ValueError("tighten the untightened slew: margins replace, they do not add up")
@@ -261,9 +261,11 @@ def tightened(slew: Slew, case: AttitudeCase, margin: float) -> Slew:
         by_name[f"forbidden_{fb.name}"] = by_name[f"forbidden_{fb.name}_opposite"] = (
             np.cos(fb.min_angle / 2) - np.cos(min(np.pi, fb.min_angle + margin) / 2))
     rate_cut = 0.0 if base.rate_max is None else base.rate_max - case.rate_max
-    by_name |= {f"rate_{i + 1}_{side}": rate_cut / base.rate_max for i in range(3) for side in ("max", "min")
+    by_name |= {f"w{i + 1}_{side}_between_nodes": rate_cut for i in range(3) for side in ("max", "min")
                 if base.rate_max is not None}
+    # each row's margin in its own unit, divided as its rows are
     per_constraint = np.array([by_name[c.name] for c in program.problem.constraints], dtype=float)
+    per_constraint = per_constraint / program.path_divisors
     bounds = np.zeros((program.N + 1, NX))
     bounds[:, 4:7] = rate_cut
     margins = Margins(per_constraint[[j for _, _, j in program.path_rows]], bounds.ravel())
@@ -286,9 +288,10 @@ def transcribe_slew(case: AttitudeCase, intervals: int, guess: np.ndarray, tf_gu
 
 def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_scale: float) -> Problem:
     """The slew as a :class:`convexguid.ocp.Problem` (see the module docstring): states ``q1..q4`` (scale 1),
-    ``w1..w3`` (``rate_scale``, the rate box a hard bound at the nodes), torques ``u1..u3`` (their boxes, scaled by
-    them); the final attitude as the quaternion error's vector part; each cone, forbidden attitude and the rate box
-    between nodes as path constraints (a repair tightens them by the program's margins, :func:`tightened`)."""
+    ``w1..w3`` (``rate_scale``, the rate box their bounds: hard at the nodes, penalized rows between them),
+    torques ``u1..u3`` (their boxes, scaled by them); the final attitude as the quaternion error's vector part;
+    each cone and forbidden attitude as path constraints (a repair tightens them and the rate box by the program's
+    margins, :func:`tightened`)."""
     p = Problem(case.name)
     q = [p.state(f"q{i + 1}", initial=float(case.q0[i]), scale=1.0) for i in range(4)]
     rate_box = None if case.rate_max is None else (-case.rate_max, case.rate_max)
@@ -314,12 +317,6 @@ def attitude_problem(case: AttitudeCase, intervals: int, tf_guess: float, rate_s
         dot = ca.dot(ca.DM(fb.q), attitude)
         p.path_constraint(f"forbidden_{fb.name}", dot - bound, "cos", scale=1.0)
         p.path_constraint(f"forbidden_{fb.name}_opposite", -dot - bound, "cos", scale=1.0)
-    if case.rate_max is not None:  # the nodes hold the rate box hard; the midpoints as penalized rows
-        for i, rate in enumerate(w):
-            p.path_constraint(f"rate_{i + 1}_max", rate / case.rate_max - 1.0, "of rate_max", at_nodes=False,
-                              scale=1.0)
-            p.path_constraint(f"rate_{i + 1}_min", -rate / case.rate_max - 1.0, "of rate_max", at_nodes=False,
-                              scale=1.0)
     if case.tf is None:
         p.final_time(bounds=(1e-3 * tf_guess, None), guess=tf_guess)
         p.minimize_time()
