@@ -28,6 +28,7 @@ from __future__ import annotations
 import copy
 from functools import cached_property
 
+import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
@@ -48,8 +49,9 @@ def with_bounds_between_nodes(problem):
     held = {c.holds_bound for c in problem.constraints}
     added = []
     for i, v in enumerate(problem.states):
-        if v.name in problem.parameter_names:
-            continue  # constant: its midpoint value is its node value
+        rate = problem.rates.get(v.name)
+        if rate is None or (ca.SX(rate).is_constant() and float(ca.evalf(rate)) == 0.0):
+            continue  # constant (a parameter, a coast's mass): its midpoint value is its node value
         for upper, bound in ((True, v.upper), (False, v.lower)):
             if bound is not None and (i, upper) not in held:
                 added.append(PathConstraint(f"{v.name}_{'max' if upper else 'min'}_between_nodes",
