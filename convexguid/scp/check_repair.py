@@ -28,8 +28,10 @@ from convexguid.scp.problem import NonconvexProgram, SCPSettings
 from convexguid.scp.state import IterationState, SCPResult, merge_results
 from convexguid.verification import Verification
 
-DEFAULT_REPAIR_BUDGET = 6
-"""Repair rounds tried after the first solve before a plan is reported ``unverified``."""
+DEFAULT_REPAIR_BUDGET = 8
+"""Repair rounds tried after the first solve before a plan is reported ``unverified``. Margins held between nodes
+converge geometrically, not at once: Zhao's dynamic soaring cut its load factor's breach 0.0081 -> 0.0021 ->
+0.00066 -> 0.00025 -> 0.0001 in rounds 2 to 6 and verified in round 7 (at 6 it ended ``unverified``)."""
 
 
 @dataclass(frozen=True)
