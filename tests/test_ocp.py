@@ -601,3 +601,27 @@ def test_a_path_equality_is_solved_the_same_in_whatever_unit_it_is_stated():
         assert solution.objective == pytest.approx(solutions[1].objective, rel=1e-6)
     radius = np.hypot(solutions[1].dense.columns["x"], solutions[1].dense.columns["y"])
     assert np.max(np.abs(radius - 1.0)) < 1e-4
+
+
+@pytest.mark.parametrize("zero_cost", ["terminal", "integral"])
+def test_a_boundary_value_problem_stated_with_a_zero_cost_converges(zero_cost):
+    """COPS 3.0's flow in a channel (Dolan, More & Munson 2004), R = 10: the fourth derivative of u is
+    R (u' u'' - u u'''), u(0) = u'(0) = 0, u(1) = 1, u'(1) = 0, a boundary-value problem a user states with a zero
+    cost. The penalty weights, counted in the objective's size, were 1e-11 (steps refused with ratio -1 until they
+    climbed back), and the KKT residuals, relative to 1e-12, never met the tolerance: ``max_iterations`` with the
+    solution in hand. Both now count in absolute units, and u''(0) is SciPy's solve_bvp value 10.0367718 to the
+    grid's accuracy."""
+    p = Problem("flow in a channel")
+    u1 = p.state("u1", initial=0.0, final=1.0)
+    u2 = p.state("u2", initial=0.0, final=0.0)
+    u3, u4 = p.state("u3"), p.state("u4")
+    p.dynamics({u1: u2, u2: u3, u3: u4, u4: 10.0 * (u2 * u3 - u1 * u4)})
+    p.final_time(fixed=1.0)
+    if zero_cost == "terminal":
+        p.minimize_terminal(0 * u1)
+    else:
+        p.minimize_integral(0 * u1)
+    p.transcription(20)
+    sol = p.solve(max_iterations=100)
+    assert sol.status == "converged", sol.message
+    assert sol.nodes.columns["u3"][0] == pytest.approx(10.0367718, rel=1e-4)

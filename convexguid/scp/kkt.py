@@ -16,7 +16,8 @@ Thm. 12.1, eqs. 12.34):
 * complementarity: :math:`\\max_j |\\mu_j g_j(x)|` over every inequality and :math:`|y_i^T (F_i x + f_i)|` over
   every cone, in the objective's units.
 
-Stationarity and complementarity are judged relative to :math:`\\max(|f(x)|, 10^{-3}|f(x_0)|)`.
+Stationarity and complementarity are judged relative to :math:`\\max(|f(x)|, 10^{-3} s_f)`, :math:`s_f` the
+objective's size at the start (:math:`|f(x_0)|`, or :math:`|c|^T \\sigma` if larger), and absolutely when both are 0.
 """
 
 from __future__ import annotations
@@ -62,8 +63,9 @@ class KKTResiduals:
 
 def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, weights: np.ndarray,
                   cost: np.ndarray, linear: LinearConstraints, outputs: OutputConstraints, scale: np.ndarray,
-                  objective: float, objective_at_start: float, feasibility: float) -> KKTResiduals:
-    """The KKT residuals of the program at ``x`` (``raw``: its evaluation there, with Jacobians)."""
+                  objective: float, objective_size: float, feasibility: float) -> KKTResiduals:
+    """The KKT residuals of the program at ``x`` (``raw``: its evaluation there, with Jacobians), relative to the
+    larger of the objective and a thousandth of its size at the start (``objective_size``: the engine's)."""
     omega = multipliers.residual_weights(raw.residuals, weights, outputs)
     gradient = cost + lagrangian_gradient(raw, CurvatureWeights(omega, multipliers.inequality, multipliers.equality))
     A, G = linear.A, linear.G  # dense or sparse, as the program gives them
@@ -89,7 +91,10 @@ def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, w
         products.append(np.array([duals[end - size: end] @ block.values[end - size: end]
                                   for end, size in zip(ends, block.sizes, strict=True)]))
     complementarity = float(np.max(np.abs(np.concatenate(products)), initial=0.0))
-    unit = max(abs(objective), 1e-3 * abs(objective_at_start), 1e-12)
+    unit = max(abs(objective), 1e-3 * objective_size)
+    # an objective without a size (a boundary-value problem stated with a zero cost) makes them absolute: relative to
+    # 1e-12, a round-off of 9e-16 was a stationarity of 9e-4 and the run never ended
+    unit = max(unit, 1e-12) if unit > 0 else 1.0
     return KKTResiduals(stationarity, feasibility, complementarity, unit)
 
 

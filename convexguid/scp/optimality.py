@@ -36,7 +36,7 @@ def measure_kkt(algo: SCPAlgorithm, state: IterationState) -> None:
         return
     state.kkt = kkt_residuals(state.x, state.raw, state.multipliers, weights=algo.weights, cost=algo.cost,
                               linear=algo.linear, outputs=algo.outputs, scale=algo.scale,
-                              objective=state.objective, objective_at_start=algo.objective_at_start,
+                              objective=state.objective, objective_size=algo.objective_size,
                               feasibility=max_violation(state.ev))
 
 

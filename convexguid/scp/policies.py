@@ -104,8 +104,12 @@ class PenaltyPolicy:
         return cls(s.penalty, s.penalty_max, s.penalty_unit)
 
     def scale(self, objective_size: float) -> float:
-        """The unit of the weights: 1, or the objective's size at the start (at least 1e-12)."""
-        return max(abs(objective_size), 1e-12) if self.unit == "objective" else 1.0
+        """The unit of the weights: 1, or the objective's size at the start (at least 1e-12); 1 also when that size
+        is zero (a zero cost, stated for a boundary-value problem: weights of 1e-11 let the violation be traded for
+        nothing, and the steps were refused with ratio -1 until the weight had climbed back)."""
+        if self.unit != "objective" or objective_size == 0.0:
+            return 1.0
+        return max(abs(objective_size), 1e-12)
 
     def initial(self, objective_size: float) -> float:
         return self.start * self.scale(objective_size)
