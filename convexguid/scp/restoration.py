@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram, make_backend
-from convexguid.scp.merit import describe_violations
+from convexguid.scp.merit import describe_violations, penalty_sum
 from convexguid.scp.problem import LinearConstraints, NonconvexProgram
 
 if TYPE_CHECKING:
@@ -102,7 +102,9 @@ def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
     same engine, the objective dropped). A feasible point found so restarts the main loop from it; a phase-1 stall
     with the violation positive is the certificate of infeasibility: local, or global when every map is affine."""
     if state.phase1_runs >= MAX_PHASE1_RUNS:
-        state.finish("max_iterations", "iterates stalled with constraints violated after a phase-1 restart: "
+        # no certificate (each phase 1 found a feasible point) and no iteration limit reached: not a plan
+        state.finish("unverified", f"iterates stalled with constraints violated after {MAX_PHASE1_RUNS} phase-1 "
+                     "restarts (each found a feasible point the main loop left again): "
                      + describe_violations(state.ev))
         return
     state.phase1_runs += 1
@@ -125,6 +127,12 @@ def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
     if p1.status == "converged":
         state.kkt, state.merit = None, algo.merit(state.ev, state.x, state.penalty)
         state.radius = algo.trust_region.initial
+        if state.funnel is not None:
+            # a funnel as wide as the start's would let the next step throw the restored feasibility away (the
+            # isoperimetric problem left it three times for the violation 0.34 it started from): it starts afresh,
+            # as a warm start's, at the restored point
+            state.funnel = algo.funnel.initial(max(penalty_sum(state.ev), algo.settings.feasibility_tolerance),
+                                               warm=True)
     else:
         where = ("the program is convex: no point is feasible" if getattr(algo.program, "affine", False)
                  else "locally: no nearby point is feasible")
