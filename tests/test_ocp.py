@@ -216,11 +216,22 @@ def test_a_keep_out_circle_is_respected_between_the_nodes_and_the_optimum_is_ipo
     (lambda p: p.path_constraint("c", p.state("x"), scale=0.0), r"^demo: path_constraint 'c': scale: must be positive"),
     (lambda p: p.point_equality("e", p.state("x"), at=1.0, scale="big"),
      r"^demo: point_equality 'e': scale: expected a finite number"),
+    (lambda p: p.boundary_constraint("b", {"x": 1.0}),
+     r"^demo: boundary_constraint 'b': expected an expression or a list of them \(got dict"),
 ])
 def test_a_wrong_statement_is_one_line_naming_it(statement, message):
     with pytest.raises(SpecError, match=message) as error:
         statement(Problem("demo"))
     assert "\n" not in str(error.value)
+
+
+def test_a_column_may_be_stated_as_a_list_of_expressions():
+    """``[x - 1, y]`` is a column as ``ca.vertcat(x - 1, y)`` is (it was CasADi's raw NotImplementedError)."""
+    p = Problem("listed")
+    x, y = p.state("x", initial=0.0), p.state("y", initial=0.0)
+    p.dynamics({x: p.control("u"), y: x})
+    p.boundary_constraint("end", [x - 1.0, y], at="final")
+    assert p.boundary_constraints[-1][1].shape == (2, 1)
 
 
 def test_a_derivative_that_is_not_a_number_at_the_iterate_is_named():

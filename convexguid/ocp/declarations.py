@@ -85,6 +85,18 @@ class PathConstraint:
         return self.during[0] - 1e-12 <= share <= self.during[1] + 1e-12
 
 
+def column(where: str, expression) -> ca.SX:
+    """``expression`` as a column of CasADi expressions: a scalar, a column, or a list or tuple of scalars (stacked);
+    anything else is one line naming ``where``."""
+    try:
+        if isinstance(expression, (list, tuple)):
+            return ca.vertcat(*(ca.SX(e) for e in expression)) if expression else ca.SX(0, 1)
+        return ca.SX(expression)
+    except (NotImplementedError, TypeError, RuntimeError) as error:
+        raise SpecError(f"{where}: expected an expression or a list of them (got {type(expression).__name__}: "
+                        f"{str(error).splitlines()[0] if str(error) else 'not an expression'})") from None
+
+
 def positive_scale(where: str, value: object) -> float | None:
     """A stated constraint magnitude (``scale=``): None, or a positive number; else one line naming ``where``."""
     scale = number(f"{where}: scale", value)

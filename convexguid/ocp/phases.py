@@ -29,6 +29,7 @@ import casadi as ca
 import numpy as np
 
 from convexguid.errors import SpecError
+from convexguid.ocp.declarations import column
 from convexguid.ocp.problem import Problem
 from convexguid.ocp.size import check_phases_size
 
@@ -93,7 +94,7 @@ class Phases:
 
     def _add_link(self, call: str, name: str, expression, equality: bool) -> None:
         where = f"{self.name}: {call} {name!r}"
-        expression = ca.SX(expression)
+        expression = column(where, expression)
         if expression.shape[1] != 1 or expression.shape[0] < 1:
             raise SpecError(f"{where}: expected a column of expressions (got shape {expression.shape})")
         if name in {link[0] for link in self.links}:

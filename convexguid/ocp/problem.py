@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from convexguid.errors import SpecError
-from convexguid.ocp.declarations import PathConstraint, Variable, number, point_kind, positive_scale
+from convexguid.ocp.declarations import PathConstraint, Variable, column, number, point_kind, positive_scale
 from convexguid.ocp.scaling import estimated_scales
 from convexguid.ocp.size import check_problem_size
 
@@ -262,7 +262,7 @@ class Problem:
         where = f"{self.name}: boundary_constraint {name!r}"
         if at not in ("initial", "final"):
             raise SpecError(f"{where}: at: expected 'initial' or 'final' (got {at!r})")
-        expression = ca.SX(expression)
+        expression = column(where, expression)
         if expression.shape[1] != 1:
             raise SpecError(f"{where}: expected a column of expressions (got shape {expression.shape})")
         if ca.depends_on(expression, self.control_vector()):
