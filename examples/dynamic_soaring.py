@@ -19,10 +19,11 @@ own ends (:class:`~convexguid.ocp.Phases`).
 The glider takes off from and lands on its bound h = 0: the collocation's first plan lands climbing and crosses the
 ground between its last two nodes, which the repair mends by holding the landing's rate into the bounds
 (docs/ocp.md, "What the engine does with it"). Measured on this machine from the straight-line guess, 40
-intervals (python -m convexguid.benches.ocp_examples): the first solve reaches beta = 0.063641 1/s, the optimum
-IPOPT finds on the same transcription from GPOPS-II's circular guess; IPOPT from the straight line stops at another
-local optimum, 0.063719. After the repair rounds (62 intervals, the landing's rate condition, margins on the load
-factor) the verified plan needs 0.063732, after 212 SCP iterations. With the glider's constants moved by 1e-12 it
+intervals (python -m convexguid.benches.ocp_examples): the first solve reaches beta = 0.063736 1/s (0.063641,
+the optimum IPOPT finds from GPOPS-II's circular guess, before the airspeed and height bounds were held between
+the nodes too); IPOPT from the straight line stops at another local optimum, 0.063692. After seven repair rounds
+(57 intervals, the landing's rate conditions, margins on the load factor) the verified plan needs 0.063735, after
+257 SCP iterations. With the glider's constants moved by 1e-12 it
 ended at the same beta to 1e-11 (446 to 582 SCP iterations against 401, measured before the penalty's steering of
 docs/engine.md). The value 0.0797 often quoted for this problem was not reproduced here, by either solver.
 Run: python examples/dynamic_soaring.py

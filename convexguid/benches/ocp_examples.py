@@ -86,9 +86,9 @@ def main() -> int:
              "the one its dense check passed after a repair round held that limit between nodes, so its final mass "
              "sits slightly below IPOPT's.",
              "Zhao's dynamic soaring (one phase, its speed, path angle and heading periodic through links; 40 "
-             "Hermite-Simpson intervals): the 40-interval NLP has several local optima (IPOPT from GPOPS-II's "
-             "circular guess finds 0.063641, convexguid's first solve too); convexguid's verified plan is on the grid "
-             "its repair refined, with the landing's rate condition and margins on the load factor."]
+             "Hermite-Simpson intervals): the 40-interval NLP has several local optima (from the same straight line "
+             "IPOPT and convexguid's first solve reach different ones); convexguid's verified plan is on the grid "
+             "its repair refined, with the landing's rate conditions and margins on the load factor."]
     text = bench_document("convexguid.ocp examples against IPOPT on the same NLP", ["numpy", "scipy", "casadi",
                           "clarabel", "piqp"], "python -m convexguid.benches.ocp_examples", caption, table, notes)
     write_text_atomic(args.output, text)
