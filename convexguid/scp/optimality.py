@@ -128,11 +128,9 @@ def escape_saddle(algo: SCPAlgorithm, state: IterationState, model: LocalModel, 
     return False
 
 
-DENSE_LEAST_SQUARES = 100_000
-"""Largest least-squares matrix (entries) :func:`least_squares_multipliers` solves densely by BVLS; a larger one is
-the sparse QP of :func:`_sparse_bounded_least_squares`. BVLS's steps are dense least-squares solves, as many as the
-bounded multipliers that change: it took 304 s of a 1511-variable solve, and 33 s of the multi-cone slew's 34 s on
-80 intervals (811 variables, under the former limit of 1e6 entries), where the sparse QP takes 5 s (docs/engine.md)."""
+DENSE_LEAST_SQUARES = 1_000_000
+"""Largest least-squares matrix (entries) :func:`least_squares_multipliers` solves densely by BVLS, which took most
+of a 1511-variable solve; a larger one is the sparse QP of :func:`_sparse_bounded_least_squares` (docs/engine.md)."""
 
 NEAR_ACTIVE = 1e-6
 """An inequality this close to its bound (in its own unit) may carry a multiplier in the least-squares estimate."""
