@@ -234,6 +234,9 @@ class DenseChecker:
         nx = program.nx
         pinned = {0: all(v.initial is not None for v in p.states), N: all(v.final is not None for v in p.states)}
         broken_equality = False
+        # each state bound's row between the nodes of each interval, where the transcription holds one
+        between = {(i, p.constraints[j].holds_bound): (r, j) for r, (point, i, j) in enumerate(program.path_rows)
+                   if point == "mid" and p.constraints[j].holds_bound is not None}
         for name, excess in excess_by_name.items():
             if name[0] == "path" and p.constraints[name[1]].equality:
                 broken_equality |= bool(np.any(excess > EQUALITY_TOLERANCE))
@@ -256,10 +259,9 @@ class DenseChecker:
                     nodes = [node for node in (k, k + 1) if not fixed.get(node)]
                     entries = [node * nx + state for node in nodes]
                     bounds[entries] = np.maximum(bounds[entries], margin)
-                    # and its row between the nodes, where the transcription holds one (in that row's divided unit)
-                    for r, (point, i, j) in enumerate(program.path_rows):
-                        if point == "mid" and i == k and p.constraints[j].holds_bound == index:
-                            path[r] = max(path[r], margin / program.path_divisors[j])
+                    if (k, index) in between:  # and its row between the nodes, in that row's divided unit
+                        r, j = between[(k, index)]
+                        path[r] = max(path[r], margin / program.path_divisors[j])
         old = program.margins
         if not any(np.any(added > 0) for added in (path, bounds, cone)):
             # nothing to tighten: a broken path equality asks for a finer grid; anything else stays broken

@@ -50,7 +50,7 @@ def with_bounds_between_nodes(problem):
     added = []
     for i, v in enumerate(problem.states):
         rate = problem.rates.get(v.name)
-        if rate is None or (ca.SX(rate).is_constant() and float(ca.evalf(rate)) == 0.0):
+        if rate is None or ca.SX(rate).is_zero():
             continue  # constant (a parameter, a coast's mass): its midpoint value is its node value
         for upper, bound in ((True, v.upper), (False, v.lower)):
             if bound is not None and (i, upper) not in held:
