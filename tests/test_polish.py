@@ -22,7 +22,7 @@ from convexguid.problem_files import parse_problem
 from convexguid.robustness.instances import random_minimum_time_slews
 from convexguid.scp.curved import convexified
 from convexguid.scp.engine import SCPAlgorithm
-from convexguid.scp.optimality import _sparse_bounded_least_squares, least_squares_multipliers
+from convexguid.scp.optimality import bounded_least_squares, least_squares_multipliers
 from convexguid.scp.policies import FunnelPolicy
 from convexguid.scp.problem import SCPSettings
 
@@ -84,16 +84,29 @@ def test_a_curved_step_the_backend_calls_inaccurate_is_still_a_step(monkeypatch)
     assert any(r.solver_status == "curved" for r in sol.history)
 
 
-def test_the_sparse_bounded_least_squares_agrees_with_bvls():
-    """Large estimates go to a sparse QP on Clarabel (BVLS took 304 s on the free-flying robot at 100 intervals)."""
+def test_the_bounded_least_squares_reaches_the_exact_residual():
+    """The multipliers' least squares is a second-order cone program on Clarabel: its residual is BVLS's (an exact
+    active set) to 1e-9 of it (the multipliers themselves agree to about the square root of the gap tolerance: the
+    residual is flat at its minimum), and where the minimizers form a face (more multipliers than stationarity rows)
+    it reaches a zero residual too."""
     rng = np.random.default_rng(11)
     matrix = sp.random(60, 25, density=0.3, random_state=rng, format="csc") + sp.eye(60, 25, format="csc")
     target = rng.standard_normal(60)
     lower = np.where(np.arange(25) < 15, 0.0, -np.inf)  # signed multipliers first, free ones after
     exact = lsq_linear(matrix.toarray(), target, bounds=(lower, np.full(25, np.inf)), method="bvls").x
     assert np.any(exact[:15] == 0.0) and np.any(exact[:15] > 0.0)  # some bounds active, some not
-    sparse = _sparse_bounded_least_squares(matrix, target, lower)
-    np.testing.assert_allclose(sparse, exact, atol=1e-7)
+    cone = bounded_least_squares(matrix, target, lower)
+    best = np.linalg.norm(matrix @ exact - target)
+    assert best > 0.1 and np.linalg.norm(matrix @ cone - target) <= best * (1 + 1e-9)
+    np.testing.assert_allclose(cone, exact, atol=1e-4)
+    assert np.all(cone[:15] >= 0.0)
+    # a face of minimizers: 40 multipliers, 25 rows, a target the signed ones reach with a zero residual
+    wide = sp.random(25, 40, density=0.3, random_state=rng, format="csc") + sp.eye(25, 40, format="csc")
+    reachable = wide @ np.concatenate([rng.uniform(0.0, 1.0, 30), rng.standard_normal(10)])
+    signed = np.where(np.arange(40) < 30, 0.0, -np.inf)
+    y = bounded_least_squares(wide, reachable, signed)
+    assert np.all(y[:30] >= 0.0)
+    assert np.linalg.norm(wide @ y - reachable) <= 1e-8 * np.linalg.norm(reachable)
 
 
 def test_a_warm_start_gets_a_funnel_without_the_cold_starts_floor():

@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import lsq_linear
 
 from convexguid.backends.base import BackendResult, Cones, ConicProgram
 from convexguid.backends.registry import make_backend
@@ -128,17 +127,13 @@ def escape_saddle(algo: SCPAlgorithm, state: IterationState, model: LocalModel, 
     return False
 
 
-DENSE_LEAST_SQUARES = 1_000_000
-"""Largest least-squares matrix (entries) :func:`least_squares_multipliers` solves densely by BVLS, which took most
-of a 1511-variable solve; a larger one is the sparse QP of :func:`_sparse_bounded_least_squares` (docs/engine.md)."""
-
 NEAR_ACTIVE = 1e-6
 """An inequality this close to its bound (in its own unit) may carry a multiplier in the least-squares estimate."""
 
 
 def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Multipliers | None:
     """The multipliers that best satisfy stationarity at the iterate, :math:`\\min \\|S(\\nabla f + A_W^T y)\\|_2`
-    (bounded least squares: SciPy's BVLS, or Clarabel on a large one, :data:`DENSE_LEAST_SQUARES`): nonnegative on the
+    (bounded least squares, :func:`bounded_least_squares`): nonnegative on the
     inequalities within :data:`NEAR_ACTIVE` of their bounds, free on the equalities, zero elsewhere; a second-order
     cone within :data:`NEAR_ACTIVE` of its boundary (not at its apex) is the inequality
     :math:`\\|v_{1:}\\| - v_0 \\le 0` there, whose multiplier :math:`\\mu` is the cone dual
@@ -161,33 +156,38 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     lower = np.concatenate([np.full(free, -np.inf), np.zeros(signed), np.full(size, -np.inf),
                             np.zeros(cone_rows.shape[0])])
     target = -objective_gradient(raw, algo.weights, algo.cost) * algo.scale
-    if (rows.shape[0] + cone_rows.shape[0]) * rows.shape[1] <= DENSE_LEAST_SQUARES:
-        matrix = (np.vstack([rows, cone_rows.toarray()]) * algo.scale).T
-        y = lsq_linear(matrix, target, bounds=(lower, np.full(lower.size, np.inf)), method="bvls").x
-    else:
-        matrix = sp.vstack([sp.csr_matrix(rows), cone_rows]).multiply(algo.scale[None, :]).T
-        y = _sparse_bounded_least_squares(sp.csc_matrix(matrix), target, lower)
-        if y is None:
-            return None
+    matrix = sp.vstack([sp.csr_matrix(rows), cone_rows]).multiply(algo.scale[None, :]).T
+    y = bounded_least_squares(sp.csc_matrix(matrix), target, lower)
+    if y is None:
+        return None
     shape = Multipliers(np.zeros(size), np.zeros(values.size), np.zeros(out.size), np.zeros(free), np.zeros(gap.size))
     estimate = working.multipliers(y[: rows.shape[0]], shape)
     return replace(estimate, cone=cone_duals @ y[rows.shape[0]:]) if raw.cones else estimate
 
 
-def _sparse_bounded_least_squares(matrix: sp.csc_matrix, target: np.ndarray,
-                                  lower: np.ndarray) -> np.ndarray | None:
-    """:math:`\\min_y \\tfrac12 \\|M y - t\\|^2` with :math:`y_i \\ge` ``lower`` where that is finite (0 or
-    :math:`-\\infty`), as the sparse QP in :math:`(y, r)` with :math:`r = M y - t` (Clarabel): its :math:`y`, or
-    None when Clarabel does not solve it."""
+def bounded_least_squares(matrix: sp.csc_matrix, target: np.ndarray, lower: np.ndarray) -> np.ndarray | None:
+    """:math:`\\min_y \\|M y - t\\|_2` with :math:`y_i \\ge` ``lower`` where that is finite (0 or :math:`-\\infty`),
+    as the second-order cone program :math:`\\min s` over :math:`\\|M y - t\\| \\le s` (Clarabel, sparse): its
+    :math:`y` (the signed entries clipped at 0), or None when Clarabel does not solve it. The norm itself is the
+    objective, so Clarabel's gap tolerance bounds the residual, not its square: as a QP in :math:`\\|r\\|^2` a
+    tolerance of 1e-10 left residuals of 6e-5 (docs/engine.md, 'Least-squares multipliers'). Where the minimizers
+    form a face (degenerate active constraints), the interior method returns a point inside it, not one of its
+    vertices, which an active set (BVLS) picks by the order of its pivots."""
     m, n = matrix.shape
     signed = np.flatnonzero(np.isfinite(lower))
-    P = sp.block_diag([sp.csc_matrix((n, n)), sp.identity(m, format="csc")], format="csc")
-    bounded = sp.csr_matrix((-np.ones(signed.size), (np.arange(signed.size), signed)), shape=(signed.size, n + m))
-    A = sp.vstack([sp.hstack([matrix, -sp.identity(m)]), bounded], format="csc")
-    program = ConicProgram(sp.triu(P, format="csc"), np.zeros(n + m), A, np.concatenate([target, -lower[signed]]),
-                           Cones(zero=m, nonneg=signed.size))
+    sign_rows = sp.csr_matrix((-np.ones(signed.size), (np.arange(signed.size), signed)), shape=(signed.size, n + 1))
+    norm_rows = sp.vstack([sp.csr_matrix(([-1.0], ([0], [n])), shape=(1, n + 1)),
+                           sp.hstack([-matrix, sp.csr_matrix((m, 1))])])
+    q = np.zeros(n + 1)
+    q[n] = 1.0
+    program = ConicProgram(sp.csc_matrix((n + 1, n + 1)), q, sp.vstack([sign_rows, norm_rows], format="csc"),
+                           np.concatenate([-lower[signed], [0.0], -target]), Cones(nonneg=signed.size, soc=(m + 1,)))
     result = make_backend("clarabel", program, tolerance=1e-10).solve()
-    return None if result.x is None else result.x[:n]
+    if result.x is None:
+        return None
+    y = result.x[:n].copy()
+    y[signed] = np.maximum(y[signed], lower[signed])
+    return y
 
 
 def _cone_rows(raw, n: int) -> tuple[sp.csr_matrix, np.ndarray]:
