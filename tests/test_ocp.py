@@ -97,6 +97,23 @@ def test_minimum_energy_rest_to_rest_is_the_closed_form():
     assert np.allclose(solution.nodes.columns["u"], 6 - 12 * t, atol=1e-6)
 
 
+@pytest.mark.parametrize("backend", ["clarabel", "piqp", "daqp"])
+def test_a_problem_names_the_backend_of_its_subproblems(backend):
+    """``solve(backend=...)`` runs the subproblems there (the summary says which) and reaches the same optimum.
+    (OSQP does not: docs/ocp.md, the ``p.solve`` row.)"""
+    solution = _keep_out().solve(backend=backend)
+    assert solution.ok, solution.message
+    assert solution.summary()["solver"] == backend
+    assert solution.objective == pytest.approx(_keep_out().solve().objective, rel=1e-6)
+
+
+def test_an_unknown_backend_is_one_line_naming_the_call_and_what_is_installed():
+    with pytest.raises(SpecError, match=r"^double-integrator: solve: backend: unknown backend 'gurobi'; installed: "
+                                        r"auto, clarabel") as error:
+        double_integrator().solve(backend="gurobi")
+    assert "\n" not in str(error.value)
+
+
 @pytest.mark.parametrize("weight, expected", [(0.0, math.tanh(1.0)), (1.0, 1.0), (3.0, (3 + math.tanh(1.0))
                                                                                    / (1 + 3 * math.tanh(1.0)))])
 def test_an_integral_cost_with_a_terminal_one_is_the_riccati_value(weight, expected):

@@ -153,11 +153,11 @@ class Phases:
                           program.straight_guess(start, end, control))
         return np.concatenate(pieces)
 
-    def solve(self, max_iterations: int = 300, verification_points: int = 20, log=None):
+    def solve(self, max_iterations: int = 300, verification_points: int = 20, log=None, backend: str = "auto"):
         """Transcribe every phase, plan by SCP, check each phase densely and every link on the flown ends: a
         :class:`~convexguid.solution.Solution` whose tables run over the whole maneuver (a ``phase`` column gives
-        each row's phase, its index from 0)."""
+        each row's phase, its index from 0; ``log`` and ``backend`` as for :meth:`Problem.solve`)."""
         from convexguid.ocp.solve import solve_phases  # the SCP engine and SciPy load at the first solve
 
         started = time.perf_counter()
-        return solve_phases(self, started, max_iterations, verification_points, log)
+        return solve_phases(self, started, max_iterations, verification_points, log, backend)

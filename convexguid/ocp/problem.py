@@ -496,12 +496,13 @@ class Problem:
     def free_time(self) -> bool:
         return self.tf_bounds is not None
 
-    def solve(self, max_iterations: int = 300, verification_points: int = 20, log=None):
+    def solve(self, max_iterations: int = 300, verification_points: int = 20, log=None, backend: str = "auto"):
         """Transcribe, plan by SCP, check densely with SciPy: a :class:`~convexguid.solution.Solution` (``log``: a
-        function given each SCP iteration's record)."""
+        function given each SCP iteration's record; ``backend``: what solves the convex subproblems, a name
+        :func:`convexguid.backends.available_backends` lists, or ``auto``)."""
         from convexguid.ocp.solve import solve_problem  # the SCP engine and SciPy load at the first solve
 
-        return solve_problem(self, max_iterations, verification_points, log)
+        return solve_problem(self, max_iterations, verification_points, log, backend)
 
     def state_vector(self) -> ca.SX:
         return ca.vertcat(*(v.symbol for v in self.states))

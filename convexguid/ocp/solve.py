@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from convexguid.backends.registry import check_backend_name
+from convexguid.errors import BackendError, SpecError
 from convexguid.ocp.chebyshev import MappedChebyshevProgram
 from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
@@ -75,24 +77,38 @@ def program_size(program: Transcription, z: np.ndarray) -> ProgramSize:
                        program.num_path)
 
 
-def _settings(objectives: list[str | None], max_iterations: int) -> SCPSettings:
-    """The engine's settings for these objectives (of a problem, or of its phases)."""
+def _settings(objectives: list[str | None], max_iterations: int, backend: str) -> SCPSettings:
+    """The engine's settings for these objectives (of a problem, or of its phases), its subproblems on ``backend``."""
     if any(o in ("time", "terminal") for o in objectives):
         # weights in units of the objective's size (the guessed final time; a terminal cost's change when the
         # final state moves by its scales): an absolute weight let COPS' hang glider trade defects for range
-        return SCPSettings(max_iterations=max_iterations, penalty_unit="objective", penalty=30.0, penalty_max=3e6)
+        return SCPSettings(max_iterations=max_iterations, backend=backend, penalty_unit="objective", penalty=30.0,
+                           penalty_max=3e6)
     # the straight-line guess often has zero control energy: absolute weights, escalated when too small
-    return SCPSettings(max_iterations=max_iterations)
+    return SCPSettings(max_iterations=max_iterations, backend=backend)
+
+
+def checked_backend(where: str, backend: str) -> str:
+    """``backend`` when it names an installed backend (or ``auto``), else one line naming the call and what is
+    installed."""
+    if not isinstance(backend, str):
+        raise SpecError(f"{where}: backend: expected a backend's name (got {backend!r})")
+    try:
+        check_backend_name(backend)
+    except BackendError as error:
+        raise SpecError(f"{where}: backend: {error.args[0]}") from None
+    return backend
 
 
 def solve_problem(problem: Problem, max_iterations: int = 300, verification_points: int = 20,
-                  log: Log | None = None) -> Solution:
+                  log: Log | None = None, backend: str = "auto") -> Solution:
     """Plan ``problem`` by SCP from its straight-line guess, verify it densely, repair, summarise (``log`` gets one
-    record per SCP iteration)."""
+    record per SCP iteration; ``backend`` solves the subproblems)."""
     started = time.perf_counter()
+    backend = checked_backend(f"{problem.name}: solve", backend)
     program = transcribe(problem)
     with single_threaded():
-        outcome = solve_verified(program, _settings([problem.objective], max_iterations),
+        outcome = solve_verified(program, _settings([problem.objective], max_iterations, backend),
                                  DenseChecker(verification_points), log)
     final = outcome.program
     nodes, dense = _tables(final, outcome.x, outcome.check.track if outcome.check is not None else None)
@@ -140,12 +156,14 @@ def _joined(tables: list[Trajectory]) -> Trajectory:
 
 
 def solve_phases(statement: Phases, started: float, max_iterations: int = 300, verification_points: int = 20,
-                 log: Log | None = None) -> Solution:
+                 log: Log | None = None, backend: str = "auto") -> Solution:
     """Plan a maneuver in phases (:class:`~convexguid.ocp.phases.Phases`): every phase transcribed as it says, the
     links, the engine's check-repair loop with every phase checked densely, one solution over the whole maneuver."""
+    backend = checked_backend(f"{statement.name}: solve", backend)
     program = transcribe(statement)
     with single_threaded():
-        outcome = solve_verified(program, _settings([p.objective for p in statement.phases], max_iterations),
+        outcome = solve_verified(program, _settings([p.objective for p in statement.phases], max_iterations,
+                                                    backend),
                                  PhasedChecker(verification_points), log)
     final: PhasedProgram = outcome.program
     checks = outcome.check.track.phases if outcome.check is not None else [None] * len(final.phases)
