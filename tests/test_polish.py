@@ -18,9 +18,11 @@ from scipy.optimize import lsq_linear
 from test_scp_engine import ShiftedDisk
 
 from convexguid.api import solve
+from convexguid.backends.base import Cones, ConicProgram
+from convexguid.backends.registry import make_backend
 from convexguid.problem_files import parse_problem
 from convexguid.robustness.instances import random_minimum_time_slews
-from convexguid.scp.curved import convexified
+from convexguid.scp.curved import convexified, with_low_rank
 from convexguid.scp.engine import SCPAlgorithm
 from convexguid.scp.optimality import bounded_least_squares, least_squares_multipliers
 from convexguid.scp.policies import FunnelPolicy
@@ -40,10 +42,32 @@ def test_the_convexified_hessian_is_convex_and_keeps_the_reduced_hessian():
     coupling = rng.standard_normal((m, n - m))
     hessian = reduced - 3.0 * Y @ Y.T + Y @ coupling @ Z.T + Z @ coupling.T @ Y.T
     assert np.linalg.eigvalsh(hessian)[0] < 0
-    convex, gamma = convexified(hessian, rows)
+    convex, gamma, augmented, factor = convexified(hessian, rows)
     assert gamma > 0
     assert np.linalg.eigvalsh(convex)[0] >= -1e-10 * np.abs(convex).max()
     np.testing.assert_allclose(Z.T @ convex @ Z, Z.T @ hessian @ Z, atol=1e-9)
+    # the sparse backend's form of the same matrix: the augmented Hessian plus one term per negative eigenvalue
+    np.testing.assert_allclose(augmented + factor @ factor.T, convex, atol=1e-9 * np.abs(convex).max())
+
+
+def test_the_low_rank_term_is_the_same_quadratic_program():
+    """min 1/2 u'(H + F F')u + q'u over a box, solved with F F' in P and with w = F'u: the same step and value."""
+    rng = np.random.default_rng(5)
+    n, rank = 6, 2
+    root = rng.standard_normal((n, n))
+    sparse_part = np.diag(rng.uniform(0.1, 1.0, n))
+    factor = root[:, :rank]
+    q = rng.standard_normal(n)
+    box = sp.vstack([sp.identity(n), -sp.identity(n)], format="csc")
+    def program(hessian):
+        return ConicProgram(sp.triu(sp.csc_matrix(hessian), format="csc"), q, box, np.full(2 * n, 0.5),
+                            Cones(nonneg=2 * n))
+    dense = make_backend("clarabel", program(sparse_part + factor @ factor.T), tolerance=1e-10).solve()
+    lifted = make_backend("clarabel", with_low_rank(program(sparse_part), n, factor), tolerance=1e-10).solve()
+    np.testing.assert_allclose(lifted.x[:n], dense.x, atol=1e-7)
+    assert lifted.x[n:] == pytest.approx(factor.T @ lifted.x[:n], abs=1e-8)
+    assert np.any(np.abs(dense.x) >= 0.5 - 1e-6)  # the box binds: the test is of a constrained QP
+    assert lifted.objective == pytest.approx(dense.objective, rel=1e-7)
 
 
 def test_least_squares_multipliers_are_the_hand_multiplier():

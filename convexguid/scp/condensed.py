@@ -37,7 +37,7 @@ class CurvedTerms:
     """A model Hessian in the scaled step ``u`` that replaces the condensed one, with the linear and constant terms
     that come with it (:mod:`convexguid.scp.curved`)."""
 
-    hessian: np.ndarray
+    hessian: np.ndarray | sp.csc_matrix
     linear: np.ndarray
     constant: float
 
@@ -83,10 +83,15 @@ class CondensedAssembler(SubproblemRows):
             np.add.at(hess, (rows, cols), entries)
             off = rows != cols
             np.add.at(hess, (cols[off], rows[off]), entries[off])
-        if curved is not None:
-            hess = curved.hessian
-        P = sp.csc_matrix((hess.ravel()[self._p_flat], self._p_indices, self._p_indptr),
-                          shape=(self.num_z, self.num_z))
+        if curved is not None and sp.issparse(curved.hessian):
+            # a sparse curved Hessian keeps its own pattern (the program is then set up afresh, not updated)
+            P = sp.block_diag([sp.triu(curved.hessian), sp.csc_matrix((self.num_z - n, self.num_z - n))],
+                              format="csc")
+        else:
+            if curved is not None:
+                hess = curved.hessian
+            P = sp.csc_matrix((hess.ravel()[self._p_flat], self._p_indices, self._p_indptr),
+                              shape=(self.num_z, self.num_z))
         q = np.full(self.num_z, float(penalty))
         q[:n] = 2.0 * (WJ.T @ r) + self._cost_u
         constant = float(self.weights @ r**2)

@@ -11,7 +11,8 @@ part included, last multipliers) made positive semidefinite: :math:`H + \\gamma 
 positive definite wherever the reduced Hessian is for :math:`\\gamma` large enough (Finsler's lemma; Nocedal & Wright,
 *Numerical Optimization*, 2nd ed., Sec. 17.3), then any eigenvalue still below a small floor raised to it (Nocedal &
 Wright Sec. 3.4). The QP is the condensed one (:mod:`convexguid.scp.condensed`), cones kept exact, on the backend of
-:meth:`CurvedSubproblem.backend_name` (docs/engine.md, 'Curved subproblem').
+:meth:`CurvedSubproblem.backend_name`: on Clarabel its Hessian is the sparse augmented one plus a low-rank term over a
+few added variables (:func:`with_low_rank`), not the dense clipped matrix (docs/engine.md, 'Curved subproblem').
 """
 
 from __future__ import annotations
@@ -20,8 +21,9 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.sparse as sp
 
-from convexguid.backends.base import Backend, BackendResult
+from convexguid.backends.base import Backend, BackendResult, ConicProgram
 from convexguid.scp.condensed import CondensedAssembler, CurvedTerms
 from convexguid.scp.lagrangian import Multipliers, WorkingSet
 from convexguid.scp.merit import max_violation
@@ -52,9 +54,13 @@ CURVED_SIZE = 600
 and QP); a larger one takes it only at a feasible stall (measured: docs/engine.md, 'Curved subproblem')."""
 
 
-def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION) -> tuple[np.ndarray, float]:
+def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION
+                ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
     """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows``, its negative eigenvalues raised to
-    zero (the trust region bounds the step where no curvature does); and :math:`\\gamma`."""
+    zero (the trust region bounds the step where no curvature does); :math:`\\gamma`; and the same matrix as the
+    augmented Hessian :math:`H_\\gamma` (as sparse as ``hessian`` and the rows) plus :math:`F F^T`, ``F`` one
+    column :math:`\\sqrt{-\\lambda}\\, v` per negative eigenpair: the form :func:`with_low_rank` hands a sparse
+    backend."""
     H = 0.5 * (hessian + hessian.T)
     size = max(float(np.max(np.abs(H), initial=0.0)), 1e-12)
     gamma = 0.0
@@ -63,26 +69,48 @@ def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTAT
         typical = float(np.median(norms[norms > 0])) if np.any(norms > 0) else 1.0
         gamma = weight * size / typical**2
         H = H + gamma * (rows.T @ rows)
+    augmented = 0.5 * (H + H.T)
     values, vectors = np.linalg.eigh(H)
-    if values[0] < 0.0:
+    negative = values < 0.0
+    if negative.any():
         H = (vectors * np.maximum(values, 0.0)) @ vectors.T
-    return 0.5 * (H + H.T), gamma
+    return 0.5 * (H + H.T), gamma, augmented, vectors[:, negative] * np.sqrt(-values[negative])
+
+
+def with_low_rank(program: ConicProgram, n: int, factor: np.ndarray) -> ConicProgram:
+    """``program`` (its first ``n`` variables the step ``u``) with :math:`\\tfrac12 \\|F^T u\\|^2` added to its
+    objective as :math:`\\tfrac12 \\|w\\|^2` over new last variables :math:`w = F^T u` (equality rows put first):
+    a sparse Hessian plus a few dense directions stays sparse for the backend, where the eigen-clipped matrix is
+    dense (docs/engine.md, 'Curved subproblem')."""
+    rank, size = factor.shape[1], program.num_variables
+    if rank == 0:
+        return program
+    first = sp.hstack([sp.csr_matrix(factor.T), sp.csr_matrix((rank, size - n)), -sp.identity(rank)])
+    A = sp.vstack([first, sp.hstack([program.A, sp.csr_matrix((program.A.shape[0], rank))])], format="csc")
+    return ConicProgram(sp.block_diag([program.P, sp.identity(rank)], format="csc"),
+                        np.concatenate([program.q, np.zeros(rank)]), A, np.concatenate([np.zeros(rank), program.b]),
+                        replace(program.cones, zero=program.cones.zero + rank), program.constant)
 
 
 @dataclass(frozen=True)
 class CurvedModel:
-    """:math:`\\bar H` (scaled), :math:`\\gamma`, and the working rows :math:`A_W S` it is augmented with."""
+    """:math:`\\bar H` (scaled), :math:`\\gamma`, the working rows :math:`A_W S` it is augmented with, and
+    :math:`\\bar H` as :math:`H_\\gamma + F F^T` (:func:`convexified`)."""
 
     hessian: np.ndarray
     gamma: float
+    augmented: np.ndarray
+    factor: np.ndarray
     rows: np.ndarray
     working: WorkingSet
 
-    def terms(self, values: np.ndarray) -> CurvedTerms:
+    def terms(self, values: np.ndarray, sparse: bool) -> CurvedTerms:
         """The subproblem's terms when the working rows take ``values`` at the iterate: the augmentation is
         :math:`\\tfrac\\gamma2 \\|A_W S u + c\\|^2`, zero wherever the step meets their linearization, so neither
-        the model's value nor the subproblem's multipliers carry it there."""
-        return CurvedTerms(self.hessian, self.gamma * (self.rows.T @ values), 0.5 * self.gamma * float(values @ values))
+        the model's value nor the subproblem's multipliers carry it there. ``sparse``: the Hessian as
+        :math:`H_\\gamma` (sparse), the subproblem to be given :math:`F` by :func:`with_low_rank`."""
+        hessian = sp.csc_matrix(self.augmented) if sparse else self.hessian
+        return CurvedTerms(hessian, self.gamma * (self.rows.T @ values), 0.5 * self.gamma * float(values @ values))
 
 
 def strongly_active(working: WorkingSet, multipliers: Multipliers) -> WorkingSet:
@@ -140,9 +168,21 @@ class CurvedSubproblem:
                 CondensedAssembler(algo.program.num_variables, state.raw, linear, algo.outputs, algo.scale,
                                    algo.cost, algo.weights)
         values = model.working.values(ev, linear, algo.outputs, state.x)
-        program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty, curved=model.terms(values))
         name, fallback = self.backend_name()
-        # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
-        like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
-        self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)
+        if name != "clarabel":  # a dense backend: the eigen-clipped Hessian as it is
+            program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
+                                             curved=model.terms(values, sparse=False))
+            # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
+            like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
+            self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)
+            return result, value
+        # sparse: H_gamma and the low-rank F (their pattern changes with the working set: a backend per solve)
+        program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
+                                         curved=model.terms(values, sparse=True))
+        rank = model.factor.shape[1]
+        _, result, value = algo.solved(state, with_low_rank(program_k, algo.program.num_variables, model.factor),
+                                       None, name, fallback)
+        if result.x is not None:
+            result = replace(result, x=result.x[: result.x.size - rank],
+                             z=None if result.z is None else result.z[rank:])
         return result, value
