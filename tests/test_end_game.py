@@ -16,13 +16,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from differenced import differenced_hessian
-from test_scp_engine import HS071_X, HS071Epigraph, _SmallProgram
+from test_scp_engine import HS071_X, HS071Epigraph, ShiftedDisk, _SmallProgram
 
 from convexguid.api import solve
 from convexguid.families import get_family
 from convexguid.problem_files import load_problem
 from convexguid.scp.endgame import newton_step
-from convexguid.scp.engine import solve_scp
+from convexguid.scp.engine import SCPAlgorithm, solve_scp
 from convexguid.scp.lagrangian import CurvatureWeights
 from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, SCPSettings
 
@@ -126,6 +126,29 @@ def test_a_newton_step_without_any_curvature_is_a_finite_step_down_the_gradient(
     step = newton_step(gradient, np.zeros((2, 2)), rows, values)
     assert np.all(np.isfinite(step.step)) and step.shift > 0 and abs(rows @ step.step) < 1e-14
     assert np.allclose(step.step, [-np.sqrt(0.5), np.sqrt(0.5)])  # unit length along the row's null space
+
+
+def test_a_well_predicted_newton_step_cut_by_the_trust_region_opens_it_to_the_whole_step(monkeypatch):
+    """Doubling the radius toward a Newton step predicted to the digit took eight iterations on a random multi-cone
+    slew (docs/engine.md, 'Newton end game'): a good cut step opens the radius to the whole step's length at once."""
+    taken = []
+    real = SCPAlgorithm._take_newton
+
+    def spy(self, state, newton, result):
+        before = state.radius
+        real(self, state, newton, result)
+        taken.append((newton, before, state.radius))
+
+    monkeypatch.setattr(SCPAlgorithm, "_take_newton", spy)
+    algo = SCPAlgorithm(ShiftedDisk(), SCPSettings(backend="clarabel"))
+    state = algo.run(np.array([0.9, 1.05]))
+    assert state.status == "converged"
+    cut = [(n, before, after) for n, before, after in taken if not n.whole and n.ratio >= algo.trust_region.expand]
+    assert cut, "no cut Newton step was taken: the test lost its subject"
+    for newton, before, after in cut:
+        assert newton.length > 2.0 * before  # doubling would not have reached the whole step
+        assert after == pytest.approx(min(newton.length, algo.trust_region.maximum))
+    np.testing.assert_allclose(state.x, [1.0, 1.0], atol=1e-5)
 
 
 def test_rows_of_very_different_units_are_all_kept_in_the_working_set():

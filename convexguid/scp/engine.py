@@ -419,6 +419,9 @@ class SCPAlgorithm:
         state.augmented = False
         measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
+        if not newton.whole and newton.ratio >= self.trust_region.expand:
+            # a well-predicted cut step: room for the whole step next time, which the ratio test then judges
+            state.radius = max(state.radius, min(newton.length, self.trust_region.maximum))
         self.record(state, newton.step, newton.ratio, True, replace(result, status="newton"))
         if kkt_met(self, state):
             finish_optimal(self, state)

@@ -1,16 +1,17 @@
 """Newton's candidate step for one SCP iteration: the end game of :mod:`convexguid.scp.endgame`, made safe.
 
-Within ``second_order_violation`` of feasibility, :func:`newton_candidate` proposes the equality-constrained quadratic
-step on the working set of the subproblem just solved: only once two subproblems in a row agree on it; on the hard
-equalities and within the hard inequalities (a bound it breaks joins the working set, twice at most, else no step);
-inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one, freed by a good whole
-one) and the first-order one; judged by the merit's ratio test or else the funnel
-(:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`), with the weight at most the one that follows the multipliers
-(:meth:`~convexguid.scp.policies.PenaltyPolicy.judging`; Nocedal & Wright, *Numerical Optimization*, 2nd ed.,
-Sec. 18.3); with a least-norm second-order correction when its ratio is poor (the Maratos effect). A regularized step
-(the reduced Hessian indefinite) is judged by the merit alone with the iterate's own weight, and never taken when it
-breaks a hard bound. The engine takes the step only if it does at least as well as the first-order one: the end game
-can make an iteration better, never worse (why each rule: docs/engine.md, 'Newton end game').
+Within ``second_order_violation`` of feasibility, :func:`newton_candidate` proposes the equality-constrained
+quadratic step on the working set of the subproblem just solved: only once two subproblems in a row agree on it; on
+the hard equalities and within the hard inequalities (a bound it breaks joins the working set, twice at most, else
+no step); inside a trust region of its own (a quarter of a step that failed, doubled by a good cut one, freed by a
+good whole one) and the first-order one (which a good cut one opens to the whole step's length); judged by the
+merit's ratio test or else the funnel (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`), with the weight at most
+the one that follows the multipliers (:meth:`~convexguid.scp.policies.PenaltyPolicy.judging`; Nocedal & Wright,
+*Numerical Optimization*, 2nd ed., Sec. 18.3); with a least-norm second-order correction when its ratio is poor (the
+Maratos effect). A regularized step (the reduced Hessian indefinite) is judged by the merit alone with the iterate's
+own weight, and never taken when it breaks a hard bound. The engine takes the step only if it does at least as well
+as the first-order one: the end game can make an iteration better, never worse (why each rule: docs/engine.md,
+'Newton end game').
 """
 
 from __future__ import annotations
@@ -46,6 +47,8 @@ class Candidate:
     predicted: float
     whole: bool
     """Newton's step as solved (not shortened by a trust region or a bound): a small one means convergence."""
+    length: float
+    """The length of Newton's step as solved (scaled, the largest entry), before any trust region cut it."""
     accepted: bool
     funnel: Funnel | None
     """The funnel after the step (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`)."""
@@ -103,7 +106,8 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
         accepted, funnel = ratio >= algo.settings.accept_ratio, state.funnel
     else:
         accepted, ratio, funnel = algo.judged(state, ratio, x_new, ev_new, -model.quadratic(newton.step), linearized)
-    return Candidate(x_new, ev_new, merit_new, rho, ratio, step, predicted, whole, accepted, funnel, model, newton)
+    return Candidate(x_new, ev_new, merit_new, rho, ratio, step, predicted, whole, length, accepted, funnel, model,
+                     newton)
 
 
 def _within_bounds(algo: SCPAlgorithm, state: IterationState, model: LocalModel) -> tuple[LocalModel, NewtonStep]:
