@@ -37,7 +37,8 @@ from convexguid.ocp.mesh import (
 from convexguid.ocp.solve import _settings, transcribe
 from convexguid.scp.check_repair import solve_verified
 from convexguid.scp.engine import SCPAlgorithm
-from convexguid.scp.problem import SCPSettings
+from convexguid.scp.merit import describe_violations
+from convexguid.scp.problem import ConstraintBlock, Evaluation, SCPSettings
 
 GRADED = np.array([0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
 """Node shares of uneven intervals (the shortest an eighth of the longest)."""
@@ -366,3 +367,46 @@ def test_a_state_bound_holds_between_the_nodes_too(intervals):
     assert sol.repair_rounds[0].objective >= -2.5 - 1e-7
     assert -2.5 <= sol.objective <= -0.99 * 2.5
     assert float(np.max(sol.dense.columns["v"])) <= 1.0 + 1e-6
+
+
+def test_the_flight_must_end_where_the_plan_says_on_the_free_final_states_too():
+    """A cost on free final states (Park and Ramirez's reactor maximizes x1(tf) x5(tf)) is the flown one only if the
+    flight ends at the plan's last node: on 10 intervals that plan claimed 34.519 while its control flew 28.808, and
+    the check, judging stated final values alone, passed it (docs/ocp.md, the dense check)."""
+    p = Problem("free-end")
+    x = p.state("x", initial=0.0)
+    v = p.state("v", initial=0.0)
+    u = p.control("u", bounds=(-1.0, 1.0))
+    p.dynamics({x: v, v: u - 0.1 * v**2})
+    p.final_time(fixed=2.0)
+    p.minimize_integral(u**2, terminal=-x)
+    p.transcription(20)
+    checker = DenseChecker(20)
+    first = solve_verified(transcribe(p), _settings([p.objective], 300), checker, budget=0)
+    assert first.result.status == "converged"
+    check = checker.check(first.program, first.x)
+    assert check.verification.passed, check.verification
+    assert {"final_x_error", "final_v_error"} <= set(check.verification.final_errors)
+    program = first.program
+    moved = first.x.copy()
+    i = [s.name for s in p.states].index("x")
+    moved[program.N * program.nx + i] += 1e-2 * program.state_scales[i]  # the plan's last x, not its flight's
+    broken = checker.check(program, moved).verification
+    assert not broken.passed
+    assert broken.final_errors["final_x_error"] == pytest.approx(1e-2, rel=1e-3)
+
+
+def test_a_violation_message_names_the_worst_path_row():
+    """'path_constraints by 0.102' named no constraint where Park and Ramirez's reactor stalled: it was x4's lower
+    bound held between the nodes, which the user never stated as a path constraint."""
+    program = transcribe(brachistochrone_under_a_wall())
+    assert len(program.path_labels) == program.num_path
+    values = np.full(program.num_path, -1.0)
+    worst = len(values) // 2
+    values[[worst - 1, worst]] = 0.01, 0.5
+    ev = Evaluation(np.zeros(0), None, inequalities=(ConstraintBlock("path_constraints", values, None, "",
+                                                                     program.path_labels),))
+    message = describe_violations(ev)
+    kind, k, j = program.path_rows[worst]
+    assert message.startswith("path_constraints by 0.5 (worst: ")
+    assert f"{program.problem.constraints[j].name} " in message and f" {k})" in message

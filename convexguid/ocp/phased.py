@@ -192,7 +192,8 @@ class PhasedProgram:
                 residual_jacobians.append(_shifted(sp.coo_matrix(ev.residual_jacobian), offset, n))
             for blocks, out in ((ev.inequalities, inequalities), (ev.equalities, equalities)):
                 out += [ConstraintBlock(f"{t.problem.name}: {b.name}", b.values,
-                                        _shifted(b.jacobian, offset, n) if jacobians else None, b.unit) for b in blocks]
+                                        _shifted(b.jacobian, offset, n) if jacobians else None, b.unit, b.labels)
+                        for b in blocks]
             cones += [ConeBlock(f"{t.problem.name}: {c.name}", c.values,
                                 _shifted(c.jacobian, offset, n) if jacobians else None, c.sizes, c.unit)
                       for c in ev.cones]

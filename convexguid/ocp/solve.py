@@ -77,7 +77,7 @@ def program_size(program: Transcription, z: np.ndarray) -> ProgramSize:
                        program.num_path)
 
 
-def _settings(objectives: list[str | None], max_iterations: int, backend: str) -> SCPSettings:
+def _settings(objectives: list[str | None], max_iterations: int, backend: str = "auto") -> SCPSettings:
     """The engine's settings for these objectives (of a problem, or of its phases), its subproblems on ``backend``."""
     if any(o in ("time", "terminal") for o in objectives):
         # weights in units of the objective's size (the guessed final time; a terminal cost's change when the

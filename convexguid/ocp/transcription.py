@@ -266,6 +266,9 @@ class Transcription:
                     cones.append(cone_maps[j](state, control))
 
         defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
+        where = {"node": "at node", "mid": "at the midpoint of interval"}
+        self.path_labels = tuple(f"{p.constraints[j].name} {where.get(kind, 'between the nodes of interval')} {k}"
+                                 for kind, k, j in self.path_rows)
         shares = self.node_shares()
         for k in range(N):
             applying = [j for j in sorted(control_cones) if p.constraints[j].applies(float(shares[k]), False)]
@@ -445,7 +448,8 @@ class Transcription:
         if self.num_path:
             values = np.asarray(path, dtype=float).ravel() + self.margins.path
             inequalities = (ConstraintBlock("path_constraints", values,
-                                            self._path_pattern.coo(path_jac) if jacobians else None),)
+                                            self._path_pattern.coo(path_jac) if jacobians else None,
+                                            labels=self.path_labels),)
         if self.epigraph:
             value, jacobian = self._objective_epigraph(z)
             inequalities += (ConstraintBlock("objective_epigraph", np.asarray(value, dtype=float).ravel(),

@@ -25,9 +25,16 @@ def max_violation(ev: Evaluation) -> float:
 
 
 def describe_violations(ev: Evaluation) -> str:
-    """``"name by value unit; ..."`` for every violated block, or ``"none"``."""
-    units = {b.name: b.unit for b in (*ev.inequalities, *ev.equalities)}
-    parts = [f"{k} by {v:.3g} {units[k]}".rstrip() for k, v in violation_by_block(ev).items() if v > 0]
+    """``"name by value unit; ..."`` for every violated block (with its worst row where the block labels its rows),
+    or ``"none"``."""
+    blocks = {b.name: b for b in (*ev.inequalities, *ev.equalities)}
+    parts = []
+    for name, worst in violation_by_block(ev).items():
+        if worst > 0:
+            block = blocks[name]
+            violations = block.values if any(b is block for b in ev.inequalities) else np.abs(block.values)
+            where = f" (worst: {block.labels[int(np.argmax(violations))]})" if block.labels else ""
+            parts.append(f"{name} by {worst:.3g} {block.unit}".rstrip() + where)
     return "; ".join(parts) or "none"
 
 

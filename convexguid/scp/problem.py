@@ -33,6 +33,8 @@ class ConstraintBlock:
     values: np.ndarray
     jacobian: np.ndarray | None = None
     unit: str = ""
+    labels: tuple[str, ...] = ()
+    """What each row is (optional): a violation message names the worst row by it."""
 
 
 @dataclass(frozen=True)
