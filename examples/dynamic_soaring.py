@@ -23,7 +23,7 @@ intervals (python -m convexguid.benches.ocp_examples): the first solve reaches b
 the optimum IPOPT finds from GPOPS-II's circular guess, before the airspeed and height bounds were held between
 the nodes too); IPOPT from the straight line stops at another local optimum, 0.063692. After seven repair rounds
 (57 intervals, the landing's rate conditions, margins on the load factor) the verified plan needs 0.063735, after
-253 SCP iterations (257 before the curved subproblem went sparse). With the glider's constants moved by 1e-12 it
+297 SCP iterations (253 to 257 with earlier end-game rules). With the glider's constants moved by 1e-12 it
 ended at the same beta to 1e-11 (446 to 582 SCP iterations against 401, measured before the penalty's steering of
 docs/engine.md). The value 0.0797 often quoted for this problem was not reproduced here, by either solver.
 Run: python examples/dynamic_soaring.py
