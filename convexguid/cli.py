@@ -96,9 +96,14 @@ def _print_result(sol: Solution) -> None:
     if v is not None:
         for c in v.checks:
             rel = "<=" if c.sense == "max" else ">="
-            print(f"  {c.name:<24} worst {c.worst:<12.6g} {rel} {c.bound:g}")
-        finals = "   ".join(f"{k} {val:.3g}" for k, val in v.final_errors.items())
-        print(f"  {finals}\n  verification ({v.grid_points} points): {'passed' if v.passed else 'FAILED'}")
+            beyond = f"   beyond by {c.violation:.2g}" if c.violation > 0 else ""
+            print(f"  {c.name:<24} worst {c.worst:<12.6g} {rel} {c.bound:g}{beyond}")
+        lines = [""]  # every state's final error: a few to a line
+        for entry in (f"{k} {val:.3g}" for k, val in v.final_errors.items()):
+            lines[-1:] = [f"{lines[-1]}   {entry}".strip()] if len(lines[-1]) + len(entry) < 110 else [lines[-1], entry]
+        for line in lines:
+            print(f"  {line}")
+        print(f"  verification ({v.grid_points} points): {'passed' if v.passed else 'FAILED'}")
 
 
 def _check_outputs(args: argparse.Namespace) -> None:

@@ -35,10 +35,11 @@ from convexguid.ocp.mesh import (
     refined_program,
 )
 from convexguid.ocp.solve import _settings, transcribe
-from convexguid.scp.check_repair import solve_verified
+from convexguid.scp.check_repair import solve_verified, worst_violations
 from convexguid.scp.engine import SCPAlgorithm
 from convexguid.scp.merit import describe_violations
 from convexguid.scp.problem import ConstraintBlock, Evaluation, SCPSettings
+from convexguid.verification import ConstraintCheck, Verification
 
 GRADED = np.array([0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0])
 """Node shares of uneven intervals (the shortest an eighth of the longest)."""
@@ -410,3 +411,14 @@ def test_a_violation_message_names_the_worst_path_row():
     kind, k, j = program.path_rows[worst]
     assert message.startswith("path_constraints by 0.5 (worst: ")
     assert f"{program.problem.constraints[j].name} " in message and f" {k})" in message
+
+
+def test_a_broken_check_is_named_with_its_excess_and_the_largest_final_errors():
+    """'y2_min -0.4 < -0.4' hid an excess of 1e-7 in six digits; with every state's final error judged, the message
+    lists the largest few of them, not all."""
+    verification = Verification(100, (ConstraintCheck("y2_min", -0.4000001, -0.4, "min"),), 3e-3,
+                                {f"final_x{i}_error": 10.0 ** -i for i in range(1, 8)}, False)
+    message = worst_violations(verification)
+    assert message.startswith("y2_min -0.4 < -0.4 (by 1e-07); ")
+    assert "final_x1_error 0.1; final_x2_error 0.01; final_x3_error 0.001" in message
+    assert "final_x4_error" not in message
