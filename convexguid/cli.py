@@ -98,10 +98,13 @@ def _print_result(sol: Solution) -> None:
             rel = "<=" if c.sense == "max" else ">="
             beyond = f"   beyond by {c.violation:.2g}" if c.violation > 0 else ""
             print(f"  {c.name:<24} worst {c.worst:<12.6g} {rel} {c.bound:g}{beyond}")
-        lines = [""]  # every state's final error: a few to a line
+        line = ""  # every state's final error: a few to a line
         for entry in (f"{k} {val:.3g}" for k, val in v.final_errors.items()):
-            lines[-1:] = [f"{lines[-1]}   {entry}".strip()] if len(lines[-1]) + len(entry) < 110 else [lines[-1], entry]
-        for line in lines:
+            if line and len(line) + len(entry) >= 110:
+                print(f"  {line}")
+                line = ""
+            line = f"{line}   {entry}" if line else entry
+        if line:
             print(f"  {line}")
         print(f"  verification ({v.grid_points} points): {'passed' if v.passed else 'FAILED'}")
 

@@ -147,7 +147,7 @@ class DenseChecker:
         if not miss > FINAL_TOLERANCE:
             return track, ()
         # what the plan's own last node misses is no error of the flight (a plan that breaks a final condition)
-        last_node = DenseTrack(np.array([program.final_time(z)]), program.states(z)[-1:], np.zeros((1, 0)))
+        last_node = DenseTrack(np.array([program.final_time(z)]), planned[None, :], np.zeros((1, 0)))
         amplified = miss - max(self._final_errors(program, last_node, planned).values(), default=0.0)
         flows = interval_flows(program, z, self.control(program, z))
         local = float(np.sum(interval_errors(program, z, flows)))

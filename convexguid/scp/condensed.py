@@ -76,22 +76,21 @@ class CondensedAssembler(SubproblemRows):
         A, b = self.constraints(x, ev, radius, head, [np.zeros(0), self.outputs.m - self._M @ r])
         J_u = J * scale
         WJ = self.weights[:, None] * J_u
-        hess = 2.0 * (J_u.T @ WJ)
-        if self.curvature is not None and hessian is not None:
-            rows, cols = self.curvature
-            entries = hessian * scale[rows] * scale[cols]
-            np.add.at(hess, (rows, cols), entries)
-            off = rows != cols
-            np.add.at(hess, (cols[off], rows[off]), entries[off])
-        if curved is not None and sp.issparse(curved.hessian):
+        if curved is None:
+            hess = 2.0 * (J_u.T @ WJ)
+            if self.curvature is not None and hessian is not None:
+                rows, cols = self.curvature
+                entries = hessian * scale[rows] * scale[cols]
+                np.add.at(hess, (rows, cols), entries)
+                off = rows != cols
+                np.add.at(hess, (cols[off], rows[off]), entries[off])
+            P = self._dense_p(hess)
+        elif sp.issparse(curved.hessian):
             # a sparse curved Hessian keeps its own pattern (the program is then set up afresh, not updated)
             P = sp.block_diag([sp.triu(curved.hessian), sp.csc_matrix((self.num_z - n, self.num_z - n))],
                               format="csc")
         else:
-            if curved is not None:
-                hess = curved.hessian
-            P = sp.csc_matrix((hess.ravel()[self._p_flat], self._p_indices, self._p_indptr),
-                              shape=(self.num_z, self.num_z))
+            P = self._dense_p(curved.hessian)
         q = np.full(self.num_z, float(penalty))
         q[:n] = 2.0 * (WJ.T @ r) + self._cost_u
         constant = float(self.weights @ r**2)
@@ -99,3 +98,8 @@ class CondensedAssembler(SubproblemRows):
             q[:n] += curved.linear
             constant += curved.constant
         return ConicProgram(P, q, A, b, self.cones, constant=constant)
+
+    def _dense_p(self, hessian: np.ndarray) -> sp.csc_matrix:
+        """``P`` on the fixed dense pattern: ``hessian``'s upper triangle on ``u``, zero on the slacks."""
+        return sp.csc_matrix((hessian.ravel()[self._p_flat], self._p_indices, self._p_indptr),
+                             shape=(self.num_z, self.num_z))

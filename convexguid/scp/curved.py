@@ -169,16 +169,16 @@ class CurvedSubproblem:
                                    algo.cost, algo.weights)
         values = model.working.values(ev, linear, algo.outputs, state.x)
         name, fallback = self.backend_name()
-        if name != "clarabel":  # a dense backend: the eigen-clipped Hessian as it is
-            program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
-                                             curved=model.terms(values, sparse=False))
+        # on Clarabel H_gamma and the low-rank F, whose pattern changes with the working set (a backend per solve);
+        # a dense backend takes the eigen-clipped Hessian as it is
+        sparse = name == "clarabel"
+        program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
+                                         curved=model.terms(values, sparse=sparse))
+        if not sparse:
             # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
             like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
             self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)
             return result, value
-        # sparse: H_gamma and the low-rank F (their pattern changes with the working set: a backend per solve)
-        program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
-                                         curved=model.terms(values, sparse=True))
         rank = model.factor.shape[1]
         _, result, value = algo.solved(state, with_low_rank(program_k, algo.program.num_variables, model.factor),
                                        None, name, fallback)
