@@ -523,6 +523,30 @@ def test_a_scale_far_below_the_plans_size_follows_the_plan():
     assert answer.success and solution.objective == pytest.approx(answer.objective, rel=1e-6)
 
 
+def test_a_run_that_ends_short_names_the_estimated_scales_its_plan_outgrew():
+    """The fast cart stopped after three iterations: its speed, scaled by its boundary values (0.1 m/s), already
+    exceeds four times that, and the message says so and what to do; with the same scale stated, it says nothing of
+    scales (the user chose it)."""
+    def cart(scale):
+        p = Problem("fast-cart")
+        x = p.state("x", initial=0.0, final=100.0)
+        v = p.state("v", initial=0.1, final=0.1, scale=scale)
+        u = p.control("u", bounds=(-10.0, 10.0))
+        p.dynamics({x: v, v: u - 0.02 * v**2})
+        p.final_time(fixed=10.0)
+        p.minimize_energy()
+        p.transcription(30)
+        return p.solve(max_iterations=3)
+
+    estimated, stated = cart(None), cart(0.1)
+    assert estimated.status == stated.status == "max_iterations"
+    reached = float(np.max(np.abs(estimated.nodes.columns["v"])))
+    assert reached > 0.4
+    assert f"the last plan outgrew the scales estimated for v (0.1, reached {reached:.3g}): state sizes with scale=" \
+        in estimated.message, estimated.message
+    assert "outgrew" not in stated.message, stated.message
+
+
 def test_a_final_condition_blind_at_the_guess_is_reached_off_a_saddle_of_the_violation():
     """cos(phi) cos(psi) = cos(0.3) at the end of two integrators started at rest: on the straight-line guess (no turn)
     the condition's gradient vanishes, every linearization misses it, and phase 1 stalls where the violation is at

@@ -24,7 +24,8 @@ Dymos' cannonball, its speed guessed at 150-200 m/s and nothing stated of its si
 range of 268978 m (the published 3183.25 m).
 
 Once a nearly feasible plan exists, an estimated scale it exceeds more than :data:`FOLLOW_FACTOR` times grows to its
-size (:func:`following_plan`, asked once by the check-repair loop's first solve).
+size (:func:`following_plan`, asked once by the check-repair loop's first solve). A run that ends short of a verified
+plan names the estimated scales its last plan outgrew (:func:`scale_advice`): a stated ``scale`` is then the remedy.
 
 The estimate is crude, so values of a sensible size are kept (raised to it, Betts' shuttle took 491 iterations, not
 169).
@@ -114,3 +115,15 @@ def following_plan(program: Transcription, z: np.ndarray) -> Transcription | Non
                                          zip(program.problem.states, program.state_scales, scales, strict=True)
                                          if new != old)
     return restated
+
+
+def scale_advice(program: Transcription, z: np.ndarray) -> str:
+    """A clause naming each state whose scale was estimated (not stated) and that the plan ``z`` outgrew more than
+    :data:`FOLLOW_FACTOR` times, with its size and its scale; "" when none did. Told with a run that did not end
+    verified: Park and Ramirez's fed-batch volume, scaled by its initial value 1, grew past 14."""
+    sizes = np.max(np.abs(program.states(z)), axis=0)
+    grown = [f"{v.name} ({scale:.3g}, reached {size:.3g})" for v, size, scale in
+             zip(program.problem.states, sizes, program.state_scales, strict=True)
+             if v.scale_from != "stated" and size > FOLLOW_FACTOR * scale]
+    return f"the last plan outgrew the scales estimated for {', '.join(grown)}: state sizes with scale=" \
+        if grown else ""

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -16,8 +16,9 @@ from convexguid.ocp.check import DenseChecker
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.hold import ClosedFormFlowProgram, FirstOrderHoldProgram, ZeroOrderHoldProgram
 from convexguid.ocp.phased import Link, PhasedChecker, PhasedProgram
+from convexguid.ocp.scaling import scale_advice
 from convexguid.ocp.transcription import Transcription
-from convexguid.scp.check_repair import solve_verified
+from convexguid.scp.check_repair import VerifiedSolve, solve_verified
 from convexguid.scp.engine import Log
 from convexguid.scp.problem import ProgramSize, SCPSettings
 from convexguid.solution import Figures, Solution, Trajectory, optional, planned_solution
@@ -111,10 +112,20 @@ def solve_problem(problem: Problem, max_iterations: int = 300, verification_poin
         outcome = solve_verified(program, _settings([problem.objective], max_iterations, backend),
                                  DenseChecker(verification_points), log)
     final = outcome.program
+    outcome = _advised(outcome, [(final, outcome.x)])
     nodes, dense = _tables(final, outcome.x, outcome.check.track if outcome.check is not None else None)
     return planned_solution(_Statement(problem.name), outcome, started, program_size(final, outcome.x),
                             nodes=nodes, dense=dense, figures=_figures([problem], nodes, final.final_time(
                                 final.unwrapped(outcome.x))))
+
+
+def _advised(outcome: VerifiedSolve, plans: list[tuple[Transcription, np.ndarray]]) -> VerifiedSolve:
+    """``outcome``, its message naming the estimated state scales its last plan outgrew when it did not converge
+    (:func:`~convexguid.ocp.scaling.scale_advice`; each plan a program and its part of the iterate)."""
+    if outcome.status == "converged":
+        return outcome
+    advice = "; ".join(filter(None, (scale_advice(t, t.unwrapped(x)) for t, x in plans)))
+    return replace(outcome, message=f"{outcome.message}; {advice}") if advice else outcome
 
 
 def _tables(program: Transcription, x: np.ndarray, track, start: float = 0.0) -> tuple[Trajectory, Trajectory | None]:
@@ -166,6 +177,7 @@ def solve_phases(statement: Phases, started: float, max_iterations: int = 300, v
                                                     backend),
                                  PhasedChecker(verification_points), log)
     final: PhasedProgram = outcome.program
+    outcome = _advised(outcome, list(zip(final.phases, final.pieces(outcome.x), strict=True)))
     checks = outcome.check.track.phases if outcome.check is not None else [None] * len(final.phases)
     start, nodes, dense, phases = 0.0, [], [], {}
     for t, piece, check in zip(final.phases, final.pieces(outcome.x), checks, strict=True):
