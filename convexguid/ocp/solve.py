@@ -124,7 +124,8 @@ def _advised(outcome: VerifiedSolve, plans: list[tuple[Transcription, np.ndarray
     (:func:`~convexguid.ocp.scaling.scale_advice`; each plan a program and its part of the iterate)."""
     if outcome.status == "converged":
         return outcome
-    advice = "; ".join(filter(None, (scale_advice(t, t.unwrapped(x)) for t, x in plans)))
+    advice = "; ".join(f"{t.problem.name}: {said}" if len(plans) > 1 else said for t, x in plans
+                       if (said := scale_advice(t, t.unwrapped(x))))
     return replace(outcome, message=f"{outcome.message}; {advice}") if advice else outcome
 
 
