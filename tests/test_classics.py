@@ -14,7 +14,7 @@ from example_modules import load_example
 
 from convexguid.classics.bench import published_figure
 from convexguid.errors import SolverError
-from convexguid.ocp import Problem
+from convexguid.ocp import Phases, Problem
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
 from convexguid.scp.check_repair import Check, Repair, solve_verified
@@ -512,3 +512,49 @@ def test_an_indefinite_reduced_hessian_still_gives_a_second_order_step():
     linear steps crawled (39 iterations, against IPOPT's 18); regularized steps reach the end game sooner."""
     solution, ipopt = _minimum_time_beside_ipopt(_minimum_time_orbit_transfer)
     assert solution.iterations <= 2 * ipopt.iterations
+
+
+def test_a_unit_steering_vector_stated_as_a_path_equality_is_found_from_a_zero_guess():
+    """Bryson & Ho's maximum range in a vertical plane as PSOPT states it (applications document, Sec. 5): x' = v u1,
+    y' = v u2, v' = a - g u2 (g = 1, a = 0.5), u1^2 + u2^2 = 1 along the path, y(2) = 0.1, both controls guessed at
+    0, which breaks the equality everywhere. PSOPT's trapezoidal collocation on 50 nodes reaches x(2) = 1.712313."""
+    p = Problem("bryson-maximum-range")
+    x, y, v = (p.state(name, bounds=(-10.0, 10.0), initial=0.0, final=0.1 if name == "y" else None)
+               for name in ("x", "y", "v"))
+    u1, u2 = (p.control(name, bounds=(-10.0, 10.0), guess=0.0) for name in ("u1", "u2"))
+    p.dynamics({x: v * u1, y: v * u2, v: 0.5 - u2})
+    p.path_equality("unit_direction", u1**2 + u2**2 - 1)
+    p.final_time(fixed=2.0)
+    p.minimize_terminal(-x)
+    p.transcription(50)
+    solution = p.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert solution.nodes.columns["x"][-1] == pytest.approx(1.712313, rel=1e-5)
+    norm = np.hypot(solution.nodes.columns["u1"], solution.nodes.columns["u2"])
+    assert np.max(np.abs(norm - 1.0)) < 1e-6
+
+
+def test_a_condition_inside_the_horizon_splits_it_into_two_phases_and_meets_the_analytic_cost():
+    """MISER3's interior-point problem (PSOPT applications document, Sec. 6): minimise the integral of x^2 + u^2 with
+    x' = u, x(0) = 1, x(0.75) = 0.9, x(1) = 0.75. The Euler-Lagrange equation x'' = x gives the cost of a segment of
+    length T from a to b as ((a^2 + b^2) cosh T - 2 a b) / sinh T: 0.9205314415 over the two segments. Cut at 0.75
+    into two phases, the control may jump there as the optimum does."""
+    def segment(name, duration, initial, final):
+        p = Problem(name)
+        x = p.state("x", bounds=(-1.0, 1.0), initial=initial, final=final)
+        u = p.control("u", bounds=(-1.0, 1.0))
+        p.dynamics({x: u})
+        p.final_time(fixed=duration)
+        p.minimize_integral(x**2 + u**2)
+        p.transcription(10)
+        return p
+
+    def cost(a, b, T):
+        return ((a * a + b * b) * math.cosh(T) - 2 * a * b) / math.sinh(T)
+
+    before, after = segment("before", 0.75, 1.0, 0.9), segment("after", 0.25, None, 0.75)
+    maneuver = Phases("interior-point", [before, after])
+    maneuver.connect(before, after, states=["x"])
+    solution = maneuver.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert solution.objective == pytest.approx(cost(1.0, 0.9, 0.75) + cost(0.9, 0.75, 0.25), rel=1e-6)
