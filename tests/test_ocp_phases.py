@@ -296,3 +296,44 @@ def test_a_loop_from_and_back_to_its_bound_leaves_and_lands_with_the_rate_inward
     assert abs(speeds[0]) < 1e-6 and abs(speeds[-1]) < 1e-6
     # what the flight still crosses by at the end is its miss of the final position, within the final tolerance
     assert solution.dense.columns["x"].min() > -1e-4
+
+
+def test_a_start_that_breaks_the_links_under_earth_sized_bounds_is_restored_not_certified_infeasible():
+    """The Delta III launch with the scales its bounds give (two Earth radii for a position) and the engine's straight
+    lines, which break the position continuity and the stage drops between the phases: the projection of that start
+    onto the hard linear rows once stopped short (Clarabel's InsufficientProgress on rows with entries of 1.3e7 beside
+    ones), and an elastic violation of 1e-11 was reported as a certificate that the launch is infeasible."""
+    from convexguid.scp.restoration import linear_violation, restore_start
+
+    launch = _example("delta_iii_launch")
+    program = transcribe(launch.build(20, scales=((None, None),) * 4, guessed=False))
+    start = program.initial_guess()
+    assert linear_violation(program.linear_constraints(), start) > 1.0
+    restored = restore_start(program, start)
+    assert restored.feasible, restored.certificate
+    assert linear_violation(program.linear_constraints(), restored.x) <= 1e-9
+
+
+def test_a_nonlinear_final_condition_is_measured_at_the_users_guess():
+    """x(1)^2 = 4 and sqrt(y(1)) = 2 with both states started at 0 and nothing else stated: on the straight line the
+    first has no gradient and the second an infinite one, so neither gives a magnitude (1 is taken). A user's guess
+    ending at x = 2 and y = 4 gives them: 2 x sigma_x = 4 sigma_x and sigma_y / (2 sqrt(y)) = sigma_y / 4."""
+    def problem(guessed):
+        p = Problem("final-conditions")
+        x, y = p.state("x", initial=0.0), p.state("y", initial=0.0)
+        u = p.control("u", bounds=(-5.0, 5.0))
+        p.dynamics({x: u, y: 2 * u})
+        p.boundary_constraint("square", x**2 - 4, at="final")
+        p.boundary_constraint("root", ca.sqrt(y) - 2, at="final")
+        p.final_time(fixed=1.0)
+        p.minimize_energy()
+        p.transcription(10)
+        if guessed:
+            share = np.linspace(0.0, 1.0, 11)[:, None]
+            p.initial_guess(np.hstack([2 * share, 4 * share]), np.full((11, 1), 2.0))
+        return transcribe(p)
+
+    straight, guessed = problem(False), problem(True)
+    assert [m for _, _, m in straight.boundary_equality_rows] == [1.0, 1.0]
+    sigma_x, sigma_y = guessed.state_scales
+    assert [m for _, _, m in guessed.boundary_equality_rows] == pytest.approx([4 * sigma_x, sigma_y / 4])

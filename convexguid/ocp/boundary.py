@@ -35,12 +35,18 @@ def affine_rows(program: Transcription) -> tuple[sp.coo_matrix, np.ndarray] | No
 
 def nonlinear_equalities(program: Transcription, X: ca.SX, tf) -> tuple[ca.SX, list[tuple[str, str, float]]]:
     """The nonlinear boundary constraints on the first or last node's states (``X``) and the final time, each row
-    divided by its magnitude: the change of its value when every state moves by its own scale, at the straight-line
-    guess (its feasibility is then judged in that magnitude, as the defects are in the states' scales); and
-    ``(name, at, magnitude)`` of each row."""
+    divided by its magnitude: the change of its value when every state moves by its own scale, at the user's guess
+    when there is one, else (or where it gives no finite positive magnitude) at the straight-line guess, else 1 (its
+    feasibility is then judged in that magnitude, as the defects are in the states' scales); and ``(name, at,
+    magnitude)`` of each row. The straight line alone is not enough: the last phase of the Delta III launch states
+    no final position, its straight line sits at the Earth's centre, where the orbital elements are not numbers,
+    and its semi-major axis row was left in metres (every subproblem then failed) though the user's guess reached
+    the target orbit."""
     p = program.problem
     x = p.state_vector()
-    guess = program.states(program.initial_guess_straight())
+    guesses = [program.states(program.initial_guess_straight())]
+    if p.guess_nodes is not None:
+        guesses.insert(0, program.states(program.initial_guess()))
     time_guess = p.tf if p.tf is not None else p.tf_guess
     rows, described = [], []
     for name, expression, at in p.boundary_constraints:
@@ -49,8 +55,11 @@ def nonlinear_equalities(program: Transcription, X: ca.SX, tf) -> tuple[ca.SX, l
         node, time = (0, 0.0) if at == "initial" else (program.N, time_guess)
         reach = ca.Function("reach", [x, p.time], [ca.mtimes(ca.fabs(ca.jacobian(expression, x)),
                                                              ca.DM(program.state_scales))])
-        magnitudes = np.asarray(reach(guess[node], time), dtype=float).ravel()
-        magnitudes = np.where(magnitudes > 0, magnitudes, 1.0)
+        magnitudes = np.full(expression.numel(), np.nan)
+        for guess in guesses:
+            found = np.asarray(reach(guess[node], time), dtype=float).ravel()
+            magnitudes = np.where(np.isnan(magnitudes) & np.isfinite(found) & (found > 0), found, magnitudes)
+        magnitudes = np.where(np.isnan(magnitudes), 1.0, magnitudes)
         value = ca.substitute(expression, ca.vertcat(x, p.time), ca.vertcat(X[:, node], 0.0 if node == 0 else tf))
         rows.append(value / ca.DM(magnitudes))
         described += [(name, at, float(m)) for m in magnitudes]
