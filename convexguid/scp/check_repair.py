@@ -14,7 +14,6 @@ otherwise the SCP's own status (``infeasible`` with its certificate, ``max_itera
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Any, Protocol
 
@@ -141,11 +140,10 @@ class PlanFollower:
 
 
 def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: PlanChecker, log: Log | None = None,
-                   budget: int = DEFAULT_REPAIR_BUDGET, x0: np.ndarray | None = None,
-                   on_round: Callable[[RepairRound], None] | None = None) -> VerifiedSolve:
+                   budget: int = DEFAULT_REPAIR_BUDGET) -> VerifiedSolve:
     """Solve, check densely, repair and re-solve warm until verified or ``budget`` repairs are spent."""
     follower = PlanFollower(program)
-    result = last = SCPAlgorithm(program, settings, log).run(x0, until=follower)
+    result = last = SCPAlgorithm(program, settings, log).run(until=follower)
     what = "first solve"
     if follower.rescaled is not None:  # the same plan, measured in the scales its size gives (warm, as a repair)
         program = follower.rescaled
@@ -167,8 +165,6 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
         v = check.verification
         rounds.append(RepairRound(attempt, what, result.status, last.iterations, result.objective, v.passed,
                                   v.max_violation, v.final_state_error, worst_violations(v)))
-        if on_round is not None:
-            on_round(rounds[-1])
         if result.status == "infeasible" and attempt > 0:
             # a certificate of the repaired program (tightened, or regridded), not of the problem as stated
             return VerifiedSolve(program, result, check, "unverified",

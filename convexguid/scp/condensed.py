@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import ConicProgram
-from convexguid.scp.assembly import SubproblemRows, _jacobian_data, csc_index_arrays
+from convexguid.scp.assembly import SubproblemRows, _jacobian_data, _Pattern
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
 
 
@@ -50,17 +50,15 @@ class CondensedAssembler(SubproblemRows):
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
                  curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
-        super().__init__(n, first, linear, outputs, scale, linear_cost, weights, curvature, lifted=False)
+        super().__init__(n, first, linear, outputs, scale, weights, curvature, lifted=False)
         self._M = sp.csr_matrix(outputs.M)
         # P: the dense upper triangle of the u block
-        self._p_rows, self._p_cols = np.triu_indices(n)
-        order = np.lexsort((self._p_rows, self._p_cols))
-        self._p_rows, self._p_cols = self._p_rows[order], self._p_cols[order]
-        counts = np.bincount(self._p_cols, minlength=self.num_z)
-        self._p_indices, self._p_indptr = csc_index_arrays(self._p_rows, np.concatenate([[0], np.cumsum(counts)]),
-                                                           (self.num_z, self.num_z))
+        rows, cols = np.triu_indices(n)
+        self._p_pattern = _Pattern((self.num_z, self.num_z))
+        self._p_pattern.add_entries(rows, cols)
+        self._p_pattern.finish()
+        self._p_flat = rows * n + cols  # the upper triangle's entries in the dense Hessian
         self._cost_u = np.asarray(linear_cost, dtype=float) * scale
-        self._p_flat = self._p_rows * n + self._p_cols  # the upper triangle's entries in the dense Hessian, CSC order
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
               hessian: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
@@ -101,5 +99,4 @@ class CondensedAssembler(SubproblemRows):
 
     def _dense_p(self, hessian: np.ndarray) -> sp.csc_matrix:
         """``P`` on the fixed dense pattern: ``hessian``'s upper triangle on ``u``, zero on the slacks."""
-        return sp.csc_matrix((hessian.ravel()[self._p_flat], self._p_indices, self._p_indptr),
-                             shape=(self.num_z, self.num_z))
+        return self._p_pattern.matrix([hessian.ravel()[self._p_flat]])

@@ -129,9 +129,9 @@ class LocalModel:
     rows: np.ndarray
     values: np.ndarray
 
-    def newton(self, values: np.ndarray | None = None) -> NewtonStep:
-        """:func:`newton_step` on this model (``values`` replace the working set's, for a second-order correction)."""
-        return newton_step(self.gradient, self.hessian, self.rows, self.values if values is None else values)
+    def newton(self) -> NewtonStep:
+        """:func:`newton_step` on this model."""
+        return newton_step(self.gradient, self.hessian, self.rows, self.values)
 
     def correction(self, values: np.ndarray) -> np.ndarray:
         """The least-norm scaled step :math:`-A^+ c` back onto the working set from where its values are ``values``:

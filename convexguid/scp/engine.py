@@ -28,6 +28,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -82,6 +83,16 @@ POLISH_ITERATIONS = 40
 """More stalls a feasible point short of the KKT tolerance may polish through (the curved subproblem, Newton's
 steps) before it is reported ``unverified``; at 20 a run along a long flat valley ended ``unverified``
 (docs/engine.md, 'KKT certificates and the polish')."""
+
+
+class Trial(NamedTuple):
+    """A trial point: ``raw`` the program's evaluation there, ``ev`` the merit's (see ``SCPAlgorithm._evaluate``)."""
+
+    x: np.ndarray
+    raw: Evaluation
+    ev: Evaluation
+    merit: float
+    ratio: float
 
 
 class SCPAlgorithm:
@@ -226,97 +237,92 @@ class SCPAlgorithm:
         """One SCP iteration (see the module docstring); returns ``state`` updated."""
         if state.finished:
             return state
-        s = self.settings
         report("SCP phase-1 iteration" if self.phase1 else "SCP iteration", state.iteration + 1)
         state.iteration += 1
         self._relax_penalty(state)
-        hessian = curved = None
-        if self.curved is not None and self.curved.wanted(state):
-            # near feasibility, or stalled short of the KKT tolerance: the SQP step with the convexified Hessian
-            curved = self.curved.hessian(state)
-        if self.curvature is not None and state.multipliers is not None:
-            hessian = self._curvature_values(state)
+        # 1-2. convexify and solve: near feasibility, or stalled short of the KKT tolerance, the SQP step with the
+        # convexified Hessian; the linear subproblem when it fails or sees no decrease (docs/engine.md, 'Curved
+        # subproblem')
+        curved = self.curved.hessian(state) if self.curved is not None and self.curved.wanted(state) else None
+        hessian = self._curvature_values(state)
         result, model = self._solve_subproblem(state, state.raw, hessian, curved)
         if curved is not None and (not result.usable or not state.merit - model > 0):
-            # the curved QP failed or sees no decrease: the linear subproblem (docs/engine.md, 'Curved subproblem')
             curved = None
             result, model = self._solve_subproblem(state, state.raw, hessian)
-        assembler = self.curved.assembler if curved is not None else self.assembler
         if not result.usable:
-            # numerical trouble (d = 0 is feasible: the start meets the hard constraints): retry a smaller subproblem
-            state.failures += 1
-            state.radius = self.trust_region.after_failure(state.radius)
-            self.record(state, 0.0, float("nan"), False, result)
-            if state.failures > self.settings.max_backend_failures:
-                broken = not_finite(state.raw)
-                state.finish("solver_error", f"backend {self.solver_label} returned {result.status} "
-                                             f"{state.failures} times in a row" + (
-                                                 f"; the linearization at the iterate is not a number in {broken}: "
-                                                 "a derivative undefined there (a norm or a root at zero?)"
-                                                 if broken else ""))
+            self._backend_failed(state, result)
             return self._check_limit(state)
         state.failures = 0
-        d = assembler.step(result.x)
+        assembler = self.curved.assembler if curved is not None else self.assembler
+        d, predicted = assembler.step(result.x), state.merit - model
         newton = None
         if result.z is not None:
             state.multipliers, state.augmented = assembler.multipliers(result.z), curved is not None
-            if certified_here(self, state, result, state.merit - model):
+            if certified_here(self, state, result, predicted):
                 return self._check_limit(state)
             t = time.perf_counter()
             newton = newton_candidate(self, state)
             state.convexify_time_s += time.perf_counter() - t
-        predicted = state.merit - model
-        x_new = state.x + d
-        raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
-        merit_new = self.merit(ev_new, x_new, state.penalty)
-        ratio = decrease_ratio(state.merit - merit_new, predicted)
+        # 3. judge the step, corrected when its ratio is poor
+        trial = self.trial(state, state.x + d, state.penalty, state.merit, predicted)
         linearized = linearized_violation(state.raw, self.outputs, d)
         predicted_objective = state.objective - (model - state.penalty * linearized)
-        if self.correction.wanted(ratio, state.raw, raw_new):
-            corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, raw_new, d),
-                                                  hessian, curved)
+        if self.correction.wanted(trial.ratio, state.raw, trial.raw):
+            shifted = SecondOrderCorrection.shifted(state.raw, trial.raw, d)
+            corrected, _ = self._solve_subproblem(state, shifted, hessian, curved)
             if corrected.usable:
                 x_soc = state.x + assembler.step(corrected.x)
-                _, ev_soc = self._evaluate(state, x_soc, jacobians=False)
-                merit_soc = self.merit(ev_soc, x_soc, state.penalty)
-                ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
-                if ratio_soc > ratio:
-                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
-                    d = x_new - state.x
+                soc = self.trial(state, x_soc, state.penalty, state.merit, predicted)
+                if soc.ratio > trial.ratio:
+                    trial, d = soc, soc.x - state.x
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
         if curved is None:
             state.pinned = state.pinned + 1 if step >= PINNED * state.radius else 0
         if newton is not None:
             if not newton.accepted:
                 state.newton_radius = 0.25 * newton.step
-            elif (newton.ratio >= self.trust_region.expand or ratio < s.accept_ratio
-                  or newton.merit <= self.merit(ev_new, x_new, newton.penalty)):
+            elif (newton.ratio >= self.trust_region.expand or trial.ratio < self.settings.accept_ratio
+                  or newton.merit <= self.merit(trial.ev, trial.x, newton.penalty)):
                 # the quadratic model predicted its merit well, or it does at least as well as the first-order point
                 self._take_newton(state, newton, result)
                 return self._check_limit(state)
-        accepted, ratio, state.funnel = self.judged(state, ratio, x_new, ev_new, predicted_objective, linearized)
-        steer = self._penalty_too_low(state, step, linearized, accepted, ev_new, hessian)
+        # 4. accept or reject, update the radius
+        accepted, ratio, state.funnel = self.judged(state, trial.ratio, trial.x, trial.ev, predicted_objective,
+                                                    linearized)
+        steer = self._penalty_too_low(state, step, linearized, accepted, trial.ev, hessian)
         if accepted:
-            state.x, state.merit = x_new, merit_new
+            state.x, state.merit = trial.x, trial.merit
             state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
             state.objective = self.objective(state.ev, state.x)
             measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, ratio, step)
         self.record(state, step, ratio, accepted, result if curved is None else replace(result, status="curved"))
-        if self.phase1 and accepted and max_violation(state.ev) <= RESTORED * s.feasibility_tolerance:
+        # 5. stop, or raise the penalty
+        if self.phase1 and accepted and max_violation(state.ev) <= RESTORED * self.settings.feasibility_tolerance:
             state.finish("converged", "feasibility restored")
-            return self._check_limit(state)
-        if accepted and kkt_met(self, state):
+        elif accepted and kkt_met(self, state):
             finish_optimal(self, state)
-            return self._check_limit(state)
-        if accepted and curved is not None and certified_by_least_squares(self, state):
-            # the curved subproblem's own multipliers carry its augmentation (:mod:`convexguid.scp.curved`)
-            return self._check_limit(state)
-        if self._small(state, step, predicted):
+        elif accepted and curved is not None and certified_by_least_squares(self, state):
+            pass  # the curved subproblem's own multipliers carry its augmentation (:mod:`convexguid.scp.curved`)
+        elif self._small(state, step, predicted):
             self._stalled(state)
         elif steer:
             self._raise_penalty(state)
         return self._check_limit(state)
+
+    def _backend_failed(self, state: IterationState, result: BackendResult) -> None:
+        """Numerical trouble (``d = 0`` is feasible: the start meets the hard constraints): retry a smaller
+        subproblem, and end the run after more than ``max_backend_failures`` in a row."""
+        state.failures += 1
+        state.radius = self.trust_region.after_failure(state.radius)
+        self.record(state, 0.0, float("nan"), False, result)
+        if state.failures > self.settings.max_backend_failures:
+            broken = not_finite(state.raw)
+            state.finish("solver_error", f"backend {self.solver_label} returned {result.status} "
+                                         f"{state.failures} times in a row" + (
+                                             f"; the linearization at the iterate is not a number in {broken}: "
+                                             "a derivative undefined there (a norm or a root at zero?)"
+                                             if broken else ""))
 
     def _penalty_too_low(self, state: IterationState, step: float, linearized: float, accepted: bool,
                          ev_new: Evaluation, hessian: np.ndarray | None) -> bool:
@@ -368,9 +374,11 @@ class SCPAlgorithm:
                                   state.objective - self.objective(ev_new, x_new), predicted_objective,
                                   violation - linearized)
 
-    def _curvature_values(self, state: IterationState) -> np.ndarray:
-        """The program's convex curvature model at the iterate, weighted by the state's multipliers."""
+    def _curvature_values(self, state: IterationState) -> np.ndarray | None:
+        """The program's convex curvature model at the iterate, weighted by the state's multipliers (if both)."""
         m = state.multipliers
+        if self.curvature is None or m is None:
+            return None
         t = time.perf_counter()
         omega = m.residual_weights(state.raw.residuals, self.weights, self.outputs)
         values = self.curvature.values(state.x, CurvatureWeights(omega, m.inequality, m.equality))
@@ -395,11 +403,12 @@ class SCPAlgorithm:
         small_decrease = 0 <= predicted <= self.settings.tolerance * unit
         return step <= self.settings.tolerance or small_decrease or self.trust_region.collapsed(state.radius)
 
-    def trial(self, state: IterationState, u: np.ndarray) -> tuple[np.ndarray, Evaluation, Evaluation]:
-        """``(x, ev, raw)`` at the iterate moved by the scaled step ``u`` (no Jacobians)."""
-        x_new = state.x + u * self.scale
-        raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
-        return x_new, ev_new, raw_new
+    def trial(self, state: IterationState, x: np.ndarray, rho: float, merit: float, predicted: float) -> Trial:
+        """The trial point ``x`` evaluated (no Jacobians), its merit with weight ``rho`` and the ratio of its actual
+        decrease from ``merit`` to the ``predicted`` one."""
+        raw, ev = self._evaluate(state, x, jacobians=False)
+        merit_x = self.merit(ev, x, rho)
+        return Trial(x, raw, ev, merit_x, decrease_ratio(merit - merit_x, predicted))
 
     def move_to(self, state: IterationState, x: np.ndarray, penalty: float) -> None:
         """Make ``x`` the iterate: its evaluation with Jacobians, objective and merit (with weight ``penalty``)."""

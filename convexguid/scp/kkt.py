@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from convexguid.scp.lagrangian import CurvatureWeights, Multipliers, lagrangian_gradient
-from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, per_block
 
 
 @dataclass(frozen=True)
@@ -76,16 +76,8 @@ def kkt_residuals(x: np.ndarray, raw: Evaluation, multipliers: Multipliers, *, w
     for block, duals in _cone_duals(raw, multipliers):
         gradient = gradient - block.jacobian.T @ duals  # the cone v(x) in Q: -F^T y, y in Q
     stationarity = float(np.max(np.abs(gradient * scale), initial=0.0))
-    products = [np.zeros(0)]
-    if G.shape[0]:
-        products.append(multipliers.linear_inequality * (G @ x - linear.h))
-    if multipliers.output.size:
-        products.append(multipliers.output * (outputs.M @ raw.residuals - outputs.m))
-    start = 0
-    for block in raw.inequalities:
-        size = block.values.size
-        products.append(multipliers.inequality[start: start + size] * block.values)
-        start += size
+    products = [multipliers.linear_inequality * linear.gap(x), multipliers.output * outputs.gap(raw.residuals)]
+    products += [mu * block.values for block, mu in per_block(raw.inequalities, multipliers.inequality)]
     for block, duals in _cone_duals(raw, multipliers):
         ends = np.cumsum(block.sizes)
         products.append(np.array([duals[end - size: end] @ block.values[end - size: end]
@@ -102,9 +94,4 @@ def _cone_duals(raw: Evaluation, multipliers: Multipliers):
     """Each cone block with its rows' duals (zero when the multipliers came from a step that saw no cone active:
     the end game's)."""
     rows = sum(block.values.size for block in raw.cones)
-    duals = multipliers.cone if multipliers.cone.size == rows else np.zeros(rows)
-    start = 0
-    for block in raw.cones:
-        size = block.values.size
-        yield block, duals[start: start + size]
-        start += size
+    return per_block(raw.cones, multipliers.cone if multipliers.cone.size == rows else np.zeros(rows))

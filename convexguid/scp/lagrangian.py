@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, per_block, stacked_values
 
 MAX_DENSE_SIZE = 3000
 """Programs with more variables keep the first-order model (the end game works on dense matrices)."""
@@ -81,11 +81,8 @@ def lagrangian_gradient(ev: Evaluation, weights: CurvatureWeights) -> np.ndarray
     """:math:`J_r^T \\omega + J_g^T \\mu + J_e^T \\lambda` from an evaluation with Jacobians."""
     total = _transpose_times(ev.residual_jacobian, weights.residual)
     for blocks, values in ((ev.inequalities, weights.inequality), (ev.equalities, weights.equality)):
-        start = 0
-        for block in blocks:
-            size = block.values.size
-            total = total + _transpose_times(block.jacobian, values[start: start + size])
-            start += size
+        for block, part in per_block(blocks, values):
+            total = total + _transpose_times(block.jacobian, part)
     return np.asarray(total, dtype=float).ravel()
 
 
@@ -124,26 +121,22 @@ class WorkingSet:
     @classmethod
     def at(cls, ev: Evaluation, multipliers: Multipliers, linear: LinearConstraints, outputs: OutputConstraints,
            x: np.ndarray, tolerance: float, penalty: float) -> WorkingSet:
-        significant = multipliers.significant()
-        gap = linear.G @ x - linear.h if linear.G.shape[0] else np.zeros(0)
-        out = outputs.M @ ev.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
-        values = _values_of(ev.inequalities)
-        elastic = 0.999 * penalty
-        return cls((multipliers.linear_inequality > significant) | (gap >= -tolerance * (1 + np.abs(linear.h))),
-                   ((multipliers.output > significant) | (out >= -tolerance)) & (multipliers.output < elastic),
-                   ((multipliers.inequality > significant) | (values >= -tolerance))
+        significant, elastic = multipliers.significant(), 0.999 * penalty
+        near_bound = linear.gap(x) >= -tolerance * (1 + np.abs(linear.h))
+        return cls((multipliers.linear_inequality > significant) | near_bound,
+                   ((multipliers.output > significant) | (outputs.gap(ev.residuals) >= -tolerance))
+                   & (multipliers.output < elastic),
+                   ((multipliers.inequality > significant) | (stacked_values(ev.inequalities) >= -tolerance))
                    & (multipliers.inequality < elastic),
                    np.abs(multipliers.equality) < elastic)
 
     def values(self, ev: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                x: np.ndarray) -> np.ndarray:
         """The working rows' values at ``x`` (``ev``: the program's evaluation there): zero on their bounds."""
-        parts = [linear.A @ x - linear.b if linear.A.shape[0] else np.zeros(0)]
-        parts.append((linear.G @ x - linear.h)[self.linear_inequality] if linear.G.shape[0] else np.zeros(0))
-        parts.append((outputs.M @ ev.residuals - outputs.m)[self.output] if outputs.M.shape[0] else np.zeros(0))
-        parts.append(_values_of(ev.inequalities)[self.inequality])
-        parts.append(_values_of(ev.equalities)[self.equality])
-        return np.concatenate(parts)
+        return np.concatenate([linear.A @ x - linear.b if linear.A.shape[0] else np.zeros(0),
+                               linear.gap(x)[self.linear_inequality], outputs.gap(ev.residuals)[self.output],
+                               stacked_values(ev.inequalities)[self.inequality],
+                               stacked_values(ev.equalities)[self.equality]])
 
     def rows(self, ev: Evaluation, linear: LinearConstraints, outputs: OutputConstraints) -> np.ndarray:
         """The working rows' Jacobian at the point ``ev`` was evaluated (with Jacobians), dense (the end game's
@@ -152,11 +145,7 @@ class WorkingSet:
         if outputs.M.shape[0]:
             parts.append(_dense_rows(outputs.M @ ev.residual_jacobian, self.output))
         for blocks, mask in ((ev.inequalities, self.inequality), (ev.equalities, self.equality)):
-            start = 0
-            for block in blocks:
-                size = block.values.size
-                parts.append(_dense_rows(block.jacobian, mask[start: start + size]))
-                start += size
+            parts += [_dense_rows(block.jacobian, part) for block, part in per_block(blocks, mask)]
         return np.vstack(parts)
 
     def multipliers(self, y: np.ndarray, like: Multipliers) -> Multipliers:
@@ -174,10 +163,6 @@ class WorkingSet:
         return Multipliers(equality=spread(self.equality, e), inequality=spread(self.inequality, i),
                            output=spread(self.output, o),
                            linear_equality=a.copy(), linear_inequality=spread(self.linear_inequality, g))
-
-
-def _values_of(blocks) -> np.ndarray:
-    return np.concatenate([b.values for b in blocks]) if blocks else np.zeros(0)
 
 
 def _dense_rows(matrix, mask: np.ndarray | None) -> np.ndarray:

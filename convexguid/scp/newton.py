@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from convexguid.scp.endgame import LocalModel, NewtonStep, linearized_violation
-from convexguid.scp.merit import decrease_ratio, max_violation
+from convexguid.scp.merit import max_violation
 from convexguid.scp.problem import Evaluation
 
 if TYPE_CHECKING:
@@ -59,12 +59,9 @@ class Candidate:
 def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | None:
     """Newton's trial point at ``state`` (whose multipliers are its subproblem's), or None."""
     s, models = algo.settings, algo.second_order
-    if models is None or algo.phase1 or state.multipliers is None:
-        return None
-    if max_violation(state.ev) > s.second_order_violation:
-        return None
-    if state.multipliers.cone_active():
-        # a cone holds with equality: the EQP step knows no cones (the curved and first-order steps finish the run)
+    # not with a cone holding with equality: the EQP step knows no cones (the curved and first-order steps finish)
+    if (models is None or algo.phase1 or state.multipliers is None
+            or max_violation(state.ev) > s.second_order_violation or state.multipliers.cone_active()):
         return None
     working = models.working_set(state.x, state.raw, state.multipliers, s.feasibility_tolerance, state.penalty)
     settled, state.working_set = working == state.working_set, working
@@ -88,46 +85,34 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     merit = algo.merit(state.ev, state.x, rho)
     linearized = linearized_violation(state.raw, algo.outputs, newton.step * algo.scale)
     predicted = merit - (state.objective + model.quadratic(newton.step) + rho * linearized)
-    x_new, ev_new, raw_new = algo.trial(state, newton.step)
-    merit_new = algo.merit(ev_new, x_new, rho)
-    ratio = decrease_ratio(merit - merit_new, predicted)
-    if ratio < algo.correction.threshold:
-        corrected = newton.step + model.correction(model.working.values(raw_new, models.linear, algo.outputs, x_new))
-        corrected = models.onto_equalities(state.x, corrected)
+    trial = algo.trial(state, state.x + newton.step * algo.scale, rho, merit, predicted)
+    if trial.ratio < algo.correction.threshold:
+        values = model.working.values(trial.raw, models.linear, algo.outputs, trial.x)
+        corrected = models.onto_equalities(state.x, newton.step + model.correction(values))
         if (np.max(np.abs(corrected), initial=0.0) <= 2.0 * state.radius
                 and not np.any(models.broken_bounds(state.x, corrected))):
-            x_soc, ev_soc, _ = algo.trial(state, corrected)
-            merit_soc = algo.merit(ev_soc, x_soc, rho)
-            ratio_soc = decrease_ratio(merit - merit_soc, predicted)
-            if ratio_soc > ratio:
-                x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
-    step = float(np.max(np.abs(x_new - state.x) / algo.scale, initial=0.0))
+            soc = algo.trial(state, state.x + corrected * algo.scale, rho, merit, predicted)
+            trial = soc if soc.ratio > trial.ratio else trial
+    step = float(np.max(np.abs(trial.x - state.x) / algo.scale, initial=0.0))
+    ratio = trial.ratio
     if newton.shift:  # the merit alone judges a regularized step
         accepted, funnel = ratio >= algo.settings.accept_ratio, state.funnel
     else:
-        accepted, ratio, funnel = algo.judged(state, ratio, x_new, ev_new, -model.quadratic(newton.step), linearized)
-    return Candidate(x_new, ev_new, merit_new, rho, ratio, step, predicted, whole, length, accepted, funnel, model,
-                     newton)
+        accepted, ratio, funnel = algo.judged(state, ratio, trial.x, trial.ev, -model.quadratic(newton.step),
+                                              linearized)
+    return Candidate(trial.x, trial.ev, trial.merit, rho, ratio, step, predicted, whole, length, accepted, funnel,
+                     model, newton)
 
 
 def _within_bounds(algo: SCPAlgorithm, state: IterationState, model: LocalModel) -> tuple[LocalModel, NewtonStep]:
     """Newton's step on the hard equalities and within the hard inequalities (see the module docstring)."""
     models = algo.second_order
-
-    def on_equalities(newton: NewtonStep) -> NewtonStep:
-        return newton if newton.step is None else replace(newton, step=models.onto_equalities(state.x, newton.step))
-
-    newton = on_equalities(model.newton())
-    for _ in range(BOUND_ROUNDS):
-        if newton.step is None:
-            return model, newton
+    for rounds in range(BOUND_ROUNDS + 1):
+        newton = model.newton()
+        newton = replace(newton, step=models.onto_equalities(state.x, newton.step))
         broken = models.broken_bounds(state.x, newton.step)
-        if not np.any(broken):
-            return model, newton
-        if newton.shift:  # a regularized step says nothing of which bounds belong in the working set
-            return model, replace(newton, step=None)
+        if not np.any(broken) or newton.shift or rounds == BOUND_ROUNDS:
+            break
         model = models.with_bounds(model, state.raw, state.x, broken)
-        newton = on_equalities(model.newton())
-    if newton.step is not None and np.any(models.broken_bounds(state.x, newton.step)):
-        newton = replace(newton, step=None)
-    return model, newton
+    # a bound still broken stops the step (a regularized step says nothing of which belong in the working set)
+    return model, (replace(newton, step=None) if np.any(broken) else newton)

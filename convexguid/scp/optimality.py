@@ -19,6 +19,7 @@ from convexguid.backends.registry import make_backend
 from convexguid.scp.kkt import kkt_residuals
 from convexguid.scp.lagrangian import Multipliers, WorkingSet, objective_gradient
 from convexguid.scp.merit import max_violation
+from convexguid.scp.problem import stacked_values
 
 if TYPE_CHECKING:
     from convexguid.scp.endgame import LocalModel
@@ -113,13 +114,13 @@ def escape_saddle(algo: SCPAlgorithm, state: IterationState, model: LocalModel, 
     while (promised := 0.5 * -curvature * radius**2) > algo.settings.kkt_tolerance * unit:
         for sign in (1.0, -1.0):
             u = sign * radius * direction
-            x_try, _, raw_try = algo.trial(state, u)
+            tried = algo.trial(state, state.x + u * algo.scale, state.penalty, state.merit, promised)
             u = models.onto_equalities(state.x, u + model.correction(
-                model.working.values(raw_try, models.linear, algo.outputs, x_try)))
-            x_try, ev_try, _ = algo.trial(state, u)
-            if algo.merit(ev_try, x_try, state.penalty) < state.merit - ESCAPE_SHARE * promised:
+                model.working.values(tried.raw, models.linear, algo.outputs, tried.x)))
+            tried = algo.trial(state, state.x + u * algo.scale, state.penalty, state.merit, promised)
+            if tried.merit < state.merit - ESCAPE_SHARE * promised:
                 state.escapes += 1
-                algo.move_to(state, x_try, state.penalty)
+                algo.move_to(state, tried.x, state.penalty)
                 state.radius = algo.trust_region.initial
                 state.kkt = None
                 return True
@@ -139,12 +140,8 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     :math:`\\|v_{1:}\\| - v_0 \\le 0` there, whose multiplier :math:`\\mu` is the cone dual
     :math:`\\mu (1, -v_{1:}/\\|v_{1:}\\|)` (:func:`_cone_rows`). Where the active constraints are degenerate the
     subproblem's own multipliers can miss by far more (docs/engine.md, 'KKT certificates and the polish')."""
-    raw = state.raw
-    linear = algo.linear
-    outputs = algo.outputs
-    gap = linear.G @ state.x - linear.h if linear.G.shape[0] else np.zeros(0)
-    out = outputs.M @ raw.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
-    values = np.concatenate([b.values for b in raw.inequalities]) if raw.inequalities else np.zeros(0)
+    raw, linear, outputs = state.raw, algo.linear, algo.outputs
+    gap, out, values = linear.gap(state.x), outputs.gap(raw.residuals), stacked_values(raw.inequalities)
     size = sum(b.values.size for b in raw.equalities)
     working = WorkingSet(gap >= -NEAR_ACTIVE, out >= -NEAR_ACTIVE, values >= -NEAR_ACTIVE, np.ones(size, dtype=bool))
     rows = working.rows(raw, linear, outputs)

@@ -14,7 +14,7 @@ lifts :math:`y = r(x)` into the subproblem and bounds :math:`y`. A formulation i
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Protocol
@@ -62,6 +62,19 @@ class ConeBlock:
         return ConstraintBlock(self.name, self.violations(), None, self.unit)
 
 
+def stacked_values(blocks: tuple[ConstraintBlock | ConeBlock, ...]) -> np.ndarray:
+    """The blocks' values, one block after another."""
+    return np.concatenate([b.values for b in blocks]) if blocks else np.zeros(0)
+
+
+def per_block(blocks: tuple[ConstraintBlock | ConeBlock, ...], rows: np.ndarray) -> Iterator[tuple]:
+    """Each block with its part of ``rows``, an array over the blocks' rows one block after another."""
+    start = 0
+    for block in blocks:
+        yield block, rows[start: start + block.values.size]
+        start += block.values.size
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """Nonlinear maps of a :class:`NonconvexProgram` at one point (Jacobians optional)."""
@@ -98,6 +111,10 @@ class LinearConstraints:
         dense = self.A.toarray() if sp.issparse(self.A) else np.asarray(self.A, dtype=float)
         return np.linalg.lstsq(dense * scale, self.b - dense @ x, rcond=None)[0]
 
+    def gap(self, x: np.ndarray) -> np.ndarray:
+        """``G x - h``: positive where ``x`` breaks a hard inequality."""
+        return self.G @ x - self.h if self.G.shape[0] else np.zeros(0)
+
 
 def _nonzeros(matrix: np.ndarray | sp.spmatrix) -> sp.coo_matrix:
     coo = sp.coo_matrix(matrix, dtype=float)
@@ -133,9 +150,13 @@ class OutputConstraints:
         every iteration, and a transposed view made each time cost more than the product."""
         return sp.csr_matrix(self.M.T)
 
+    def gap(self, residuals: np.ndarray) -> np.ndarray:
+        """``M r - m``: positive where the residuals ``r`` break a bound."""
+        return self.M @ residuals - self.m if self.M.shape[0] else np.zeros(0)
+
     def blocks_at(self, residuals: np.ndarray) -> tuple[ConstraintBlock, ...]:
         """The constraint values ``M r - m`` split into named blocks (no Jacobians: they are linear in r)."""
-        values = self.M @ residuals - self.m
+        values = self.gap(residuals)
         return tuple(ConstraintBlock(b.name, values[b.rows], None, b.unit) for b in self.blocks)
 
 

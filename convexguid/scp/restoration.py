@@ -35,8 +35,6 @@ class Restoration:
     """A start point on the hard linear constraints, or the certificate that there is none."""
 
     x: np.ndarray | None
-    moved: float
-    """Largest scaled change of any variable (0 when the start already complied)."""
     certificate: str = ""
 
     @property
@@ -47,7 +45,7 @@ class Restoration:
 def linear_violation(lin: LinearConstraints, x: np.ndarray) -> float:
     """Worst violation of ``A x = b`` and ``G x <= h``, relative to ``1 + |rhs|``."""
     eq = np.abs(lin.A @ x - lin.b) / (1 + np.abs(lin.b)) if lin.A.shape[0] else np.zeros(0)
-    ineq = (lin.G @ x - lin.h) / (1 + np.abs(lin.h)) if lin.G.shape[0] else np.zeros(0)
+    ineq = lin.gap(x) / (1 + np.abs(lin.h))
     return float(max(np.max(eq, initial=0.0), np.max(ineq, initial=0.0)))
 
 
@@ -59,24 +57,22 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
     :math:`p, n, s \\ge 0` gives the least total violation, which is the certificate."""
     lin = program.linear_constraints()
     if linear_violation(lin, x0) <= tolerance:
-        return Restoration(x0, 0.0)
+        return Restoration(x0)
     scale = program.variable_scale()
     n, n_a, n_g = x0.size, lin.A.shape[0], lin.G.shape[0]
     if n_g == 0 and n_a <= n:
         # equalities only: the nearest point is the least-norm solution of A S v = b - A x0, in closed form
-        v = lin.onto_equalities(x0, scale)
-        if linear_violation(lin, x0 + scale * v) <= tolerance:
-            return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
+        x = x0 + scale * lin.onto_equalities(x0, scale)
+        if linear_violation(lin, x) <= tolerance:
+            return Restoration(x)
     A = sp.csc_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))
     rhs = np.concatenate([lin.b - lin.A @ x0, lin.h - lin.G @ x0])
     projection = ConicProgram(sp.identity(n, format="csc"), np.zeros(n), A, rhs, Cones(zero=n_a, nonneg=n_g))
     result = make_backend(CERTIFYING_BACKEND, projection, 1e-10).solve()
     if result.usable:
-        v = result.x
-        return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
+        return Restoration(x0 + scale * result.x)
     least = _least_violation(A, rhs, n_a, n_g)
-    return Restoration(None, float("nan"),
-                       f"the hard linear constraints (boundary conditions, bounds) are inconsistent: the elastic "
+    return Restoration(None, f"the hard linear constraints (boundary conditions, bounds) are inconsistent: the elastic "
                        f"linear program's least total violation is {least:.3g} > 0")
 
 
