@@ -1,9 +1,7 @@
-"""Assembly of the convex subproblem with a sparsity pattern fixed once.
-
-Its variables are ``z = [d, y, s_o, s_g, t_+, t_-, s_c]``: the step ``d`` from the iterate ``x``, the lifted
-residuals ``y`` (linearized :math:`r`), and nonnegative slacks on the output constraints, the linearized inequalities,
-either side of the linearized equalities and on each second-order cone (an exact l1 penalty, so every subproblem is
-feasible):
+"""Assembly of the convex subproblem with a sparsity pattern fixed once. Its variables are ``z = [d, y, s_o, s_g, t_+,
+t_-, s_c]``: the step ``d`` from the iterate ``x``, the lifted residuals ``y`` (linearized :math:`r`), and nonnegative
+slacks on the output constraints, the linearized inequalities, either side of the linearized equalities and on each
+second-order cone (an exact l1 penalty, so every subproblem is feasible):
 
 .. math::
 
@@ -39,28 +37,24 @@ class _Pattern:
         self._rows: list[np.ndarray] = []
         self._cols: list[np.ndarray] = []
 
-    def add_dense(self, row0: int, col0: int, nrows: int, ncols: int) -> None:
-        r, c = np.meshgrid(np.arange(nrows), np.arange(ncols), indexing="ij")
-        self._rows.append(row0 + r.ravel())
-        self._cols.append(col0 + c.ravel())
-
     def add_entries(self, rows: np.ndarray, cols: np.ndarray) -> None:
         self._rows.append(np.asarray(rows, dtype=int))
         self._cols.append(np.asarray(cols, dtype=int))
 
+    def add_dense(self, row0: int, col0: int, nrows: int, ncols: int) -> None:
+        r, c = np.meshgrid(np.arange(nrows), np.arange(ncols), indexing="ij")
+        self.add_entries(row0 + r.ravel(), col0 + c.ravel())
+
     def add_diagonal(self, row0: int, col0: int, size: int) -> None:
-        self._rows.append(row0 + np.arange(size))
-        self._cols.append(col0 + np.arange(size))
+        self.add_entries(row0 + np.arange(size), col0 + np.arange(size))
 
     def add_sparse(self, row0: int, col0: int, matrix: sp.spmatrix) -> None:
         coo = sp.coo_matrix(matrix)
-        self._rows.append(row0 + coo.row)
-        self._cols.append(col0 + coo.col)
+        self.add_entries(row0 + coo.row, col0 + coo.col)
 
     def finish(self) -> None:
-        """Fix the pattern: ``indices`` and ``indptr`` in the integer type ``scipy.sparse`` keeps for them (int32
-        where the sizes allow), so the matrix made at every iteration takes them neither converted nor scanned
-        (docs/engine.md)."""
+        """Fix the pattern: ``indices`` and ``indptr`` in the integer type scipy keeps for them (int32 where the sizes
+        allow), so the matrix made at every iteration takes them neither converted nor scanned (docs/engine.md)."""
         rows, cols = np.concatenate(self._rows), np.concatenate(self._cols)
         # by column, then row: the order np.lexsort((rows, cols)) gives, found by a stable sort of one key
         self._order = np.argsort(cols * self.shape[0] + rows, kind="stable")
@@ -173,8 +167,7 @@ class SubproblemRows:
         return A, b
 
     def multipliers(self, z: np.ndarray) -> Multipliers:
-        """The nonlinear program's multipliers from the subproblem's row duals (a condensed equality's: its ``+``
-        row's less its ``-`` row's)."""
+        """The program's multipliers from the row duals (a condensed equality's: its ``+`` row's less its ``-``)."""
         ends = np.cumsum(self._dual_sizes)
         a, _, e, g, o, i, plus, minus = (z[end - size: end] for end, size in zip(ends, self._dual_sizes, strict=True))
         cone = z[z.size - self._cone_rows:].copy() if self._cone_rows else np.zeros(0)
@@ -198,8 +191,8 @@ class SubproblemAssembler(SubproblemRows):
         self._m_data = sp.coo_matrix(outputs.M).data
         # P: the curvature model's upper triangle on d (if any), then the residuals' diagonal 2W on y
         rows, cols = curvature if curvature is not None else (np.zeros(0, int), np.zeros(0, int))
-        self._p_rows, self._p_cols = np.concatenate([rows, np.arange(n, n + self.m)]), np.concatenate(
-            [cols, np.arange(n, n + self.m)])
+        diagonal = np.arange(n, n + self.m)
+        self._p_rows, self._p_cols = np.concatenate([rows, diagonal]), np.concatenate([cols, diagonal])
         self._p_pattern = _Pattern((self.num_z, self.num_z))
         self._p_pattern.add_entries(self._p_rows, self._p_cols)
         self._p_pattern.finish()

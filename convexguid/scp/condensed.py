@@ -1,8 +1,7 @@
-"""The trust-region subproblem with the lifted residuals eliminated (the condensed form).
-
-When :math:`n` is small and the Jacobians are dense, substituting the lifted :math:`y = r + J d` of
-:mod:`convexguid.scp.assembly` leaves a small dense QP in the scaled step :math:`u = S^{-1} d`
-(:math:`S = \\operatorname{diag}\\sigma`), with variables ``z = [u, s_o, s_g, t, s_c]``:
+"""The trust-region subproblem with the lifted residuals eliminated (the condensed form). When :math:`n` is small and
+the Jacobians are dense, substituting the lifted :math:`y = r + J d` of :mod:`convexguid.scp.assembly` leaves a small
+dense QP in the scaled step :math:`u = S^{-1} d` (:math:`S = \\operatorname{diag}\\sigma`), with variables ``z = [u,
+s_o, s_g, t, s_c]``:
 
 .. math::
 
@@ -43,9 +42,8 @@ class CurvedTerms:
 
 
 class CondensedAssembler(SubproblemRows):
-    """Builds the condensed trust-region subproblem (the interface of ``SubproblemAssembler``): the lifted form's rows
-    less ``J d - y = -r``, the output rows ``M J`` dense on ``u``; ``P`` dense on ``u``, zero on the slacks. A program
-    with cones goes to a conic backend (the curved subproblem's Clarabel); the dense one takes none."""
+    """Builds the condensed trust-region subproblem: the output rows ``M J`` dense on ``u``; ``P`` dense on ``u``, zero
+    on the slacks. With cones it needs a conic backend (the curved subproblem's Clarabel): the dense one takes none."""
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
@@ -62,10 +60,9 @@ class CondensedAssembler(SubproblemRows):
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
               hessian: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on the
-        pattern ``curvature``, positive semidefinite). ``curved`` replaces the model's whole Hessian in ``u`` (scaled,
-        positive semidefinite, Gauss-Newton part included) and adds its linear and constant terms
-        (:mod:`convexguid.scp.curved`)."""
+        """The subproblem about ``x`` (as :meth:`~convexguid.scp.assembly.SubproblemAssembler.build` makes it);
+        ``curved`` replaces its whole Hessian in ``u`` (scaled, positive semidefinite, Gauss-Newton part included) and
+        adds its linear and constant terms (:mod:`convexguid.scp.curved`)."""
         n, scale = self.n, self.scale
         r = ev.residuals
         jac = ev.residual_jacobian
@@ -74,21 +71,18 @@ class CondensedAssembler(SubproblemRows):
         A, b = self.constraints(x, ev, radius, head, [np.zeros(0), self.outputs.m - self._M @ r])
         J_u = J * scale
         WJ = self.weights[:, None] * J_u
-        if curved is None:
-            hess = 2.0 * (J_u.T @ WJ)
-            if self.curvature is not None and hessian is not None:
-                rows, cols = self.curvature
-                entries = hessian * scale[rows] * scale[cols]
-                np.add.at(hess, (rows, cols), entries)
-                off = rows != cols
-                np.add.at(hess, (cols[off], rows[off]), entries[off])
-            P = self._dense_p(hess)
-        elif sp.issparse(curved.hessian):
+        hess = 2.0 * (J_u.T @ WJ) if curved is None else curved.hessian
+        if curved is None and self.curvature is not None and hessian is not None:
+            rows, cols = self.curvature
+            entries = hessian * scale[rows] * scale[cols]
+            np.add.at(hess, (rows, cols), entries)
+            off = rows != cols
+            np.add.at(hess, (cols[off], rows[off]), entries[off])
+        if sp.issparse(hess):
             # a sparse curved Hessian keeps its own pattern (the program is then set up afresh, not updated)
-            P = sp.block_diag([sp.triu(curved.hessian), sp.csc_matrix((self.num_z - n, self.num_z - n))],
-                              format="csc")
-        else:
-            P = self._dense_p(curved.hessian)
+            P = sp.block_diag([sp.triu(hess), sp.csc_matrix((self.num_z - n, self.num_z - n))], format="csc")
+        else:  # on the fixed dense pattern: the upper triangle on u, zero on the slacks
+            P = self._p_pattern.matrix([hess.ravel()[self._p_flat]])
         q = np.full(self.num_z, float(penalty))
         q[:n] = 2.0 * (WJ.T @ r) + self._cost_u
         constant = float(self.weights @ r**2)
@@ -96,7 +90,3 @@ class CondensedAssembler(SubproblemRows):
             q[:n] += curved.linear
             constant += curved.constant
         return ConicProgram(P, q, A, b, self.cones, constant=constant)
-
-    def _dense_p(self, hessian: np.ndarray) -> sp.csc_matrix:
-        """``P`` on the fixed dense pattern: ``hessian``'s upper triangle on ``u``, zero on the slacks."""
-        return self._p_pattern.matrix([hessian.ravel()[self._p_flat]])

@@ -1,6 +1,5 @@
-"""The Lagrangian of the nonlinear program: its multipliers, its gradient, and the working set they define.
-
-With the multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem (:class:`Multipliers`) its Hessian is
+"""The Lagrangian of the nonlinear program: its multipliers, its gradient, and the working set they define. With the
+multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem (:class:`Multipliers`) its Hessian is
 
 .. math::
 
@@ -55,9 +54,11 @@ class Multipliers:
         everything = np.concatenate([self.linear_inequality, self.output, self.inequality, self.equality, [0.0]])
         return 1e-6 * max(float(np.max(np.abs(everything))), 1e-300)
 
-    def residual_weights(self, residuals: np.ndarray, weights: np.ndarray, outputs: OutputConstraints) -> np.ndarray:
-        """:math:`\\omega = 2 W r + M^T \\nu`: the weight of each residual's curvature in the Lagrangian."""
-        return 2.0 * weights * residuals + (outputs.transposed @ self.output if self.output.size else 0.0)
+    def curvature_weights(self, residuals: np.ndarray, weights: np.ndarray,
+                          outputs: OutputConstraints) -> CurvatureWeights:
+        """The Lagrangian's weights on each map's curvature: :math:`\\omega = 2 W r + M^T \\nu` on the residuals'."""
+        omega = 2.0 * weights * residuals + (outputs.transposed @ self.output if self.output.size else 0.0)
+        return CurvatureWeights(omega, self.inequality, self.equality)
 
 
 @dataclass(frozen=True)
@@ -87,9 +88,7 @@ def lagrangian_gradient(ev: Evaluation, weights: CurvatureWeights) -> np.ndarray
 
 
 def _transpose_times(jacobian, y: np.ndarray):
-    if jacobian is None or y.size == 0:
-        return 0.0
-    return jacobian.T @ y
+    return 0.0 if jacobian is None or y.size == 0 else jacobian.T @ y
 
 
 def has_jacobian(ev: Evaluation) -> bool:
@@ -139,8 +138,7 @@ class WorkingSet:
                                stacked_values(ev.equalities)[self.equality]])
 
     def rows(self, ev: Evaluation, linear: LinearConstraints, outputs: OutputConstraints) -> np.ndarray:
-        """The working rows' Jacobian at the point ``ev`` was evaluated (with Jacobians), dense (the end game's
-        programs are small: :data:`MAX_DENSE_SIZE`)."""
+        """The working rows' dense Jacobian at ``ev`` 's point (end-game programs are small: :data:`MAX_DENSE_SIZE`)."""
         parts = [_dense_rows(linear.A, None), _dense_rows(linear.G, self.linear_inequality)]
         if outputs.M.shape[0]:
             parts.append(_dense_rows(outputs.M @ ev.residual_jacobian, self.output))
@@ -148,21 +146,17 @@ class WorkingSet:
             parts += [_dense_rows(block.jacobian, part) for block, part in per_block(blocks, mask)]
         return np.vstack(parts)
 
-    def multipliers(self, y: np.ndarray, like: Multipliers) -> Multipliers:
-        """Working-set multipliers ``y`` (in row order) spread back over every constraint (zero off the set)."""
-        sizes = [like.linear_equality.size, int(self.linear_inequality.sum()), int(self.output.sum()),
-                 int(self.inequality.sum()), int(self.equality.sum())]
-        ends = np.cumsum(sizes)
-        a, g, o, i, e = (y[end - size: end] for end, size in zip(ends, sizes, strict=True))
-
-        def spread(mask: np.ndarray, values: np.ndarray) -> np.ndarray:
-            out = np.zeros(mask.size)
-            out[mask] = values
-            return out
-
-        return Multipliers(equality=spread(self.equality, e), inequality=spread(self.inequality, i),
-                           output=spread(self.output, o),
-                           linear_equality=a.copy(), linear_inequality=spread(self.linear_inequality, g))
+    def multipliers(self, y: np.ndarray, linear_equalities: int) -> Multipliers:
+        """The working rows' multipliers ``y`` (``A x = b`` 's first) spread over every constraint, zero off the set."""
+        start, spread = linear_equalities, []
+        for mask in (self.linear_inequality, self.output, self.inequality, self.equality):
+            values = np.zeros(mask.size)
+            values[mask] = y[start: start + int(mask.sum())]
+            spread.append(values)
+            start += int(mask.sum())
+        g, o, i, e = spread
+        return Multipliers(equality=e, inequality=i, output=o, linear_equality=y[:linear_equalities].copy(),
+                           linear_inequality=g)
 
 
 def _dense_rows(matrix, mask: np.ndarray | None) -> np.ndarray:

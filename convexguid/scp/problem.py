@@ -102,7 +102,11 @@ class LinearConstraints:
     def sparse(self) -> LinearConstraints:
         """The same constraints with ``A`` and ``G`` as COO matrices of their nonzeros only (the assemblers fix their
         pattern from them: a dense block would put every explicit zero into the solver's KKT system)."""
-        return replace(self, A=_nonzeros(self.A), G=_nonzeros(self.G))
+        A, G = (sp.coo_matrix(matrix, dtype=float) for matrix in (self.A, self.G))
+        for matrix in (A, G):
+            matrix.sum_duplicates()
+            matrix.eliminate_zeros()
+        return replace(self, A=A, G=G)
 
     def onto_equalities(self, x: np.ndarray, scale: np.ndarray) -> np.ndarray:
         """The least change :math:`v` (scaled, least norm) with :math:`A (x + S v) = b`."""
@@ -114,13 +118,6 @@ class LinearConstraints:
     def gap(self, x: np.ndarray) -> np.ndarray:
         """``G x - h``: positive where ``x`` breaks a hard inequality."""
         return self.G @ x - self.h if self.G.shape[0] else np.zeros(0)
-
-
-def _nonzeros(matrix: np.ndarray | sp.spmatrix) -> sp.coo_matrix:
-    coo = sp.coo_matrix(matrix, dtype=float)
-    coo.sum_duplicates()
-    coo.eliminate_zeros()
-    return coo
 
 
 @dataclass(frozen=True)
@@ -196,20 +193,15 @@ class NonconvexProgram(Protocol):
     num_variables: int
 
     def initial_guess(self) -> np.ndarray: ...
+    def residual_weights(self) -> np.ndarray: ...
+    def linear_cost(self) -> np.ndarray: ...
+    def linear_constraints(self) -> LinearConstraints: ...
+    def output_constraints(self) -> OutputConstraints: ...
+    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation: ...
 
     def variable_scale(self) -> np.ndarray:
         """Typical magnitude of each variable; the trust region is a box in scaled units."""
         ...
-
-    def residual_weights(self) -> np.ndarray: ...
-
-    def linear_cost(self) -> np.ndarray: ...
-
-    def linear_constraints(self) -> LinearConstraints: ...
-
-    def output_constraints(self) -> OutputConstraints: ...
-
-    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation: ...
 
 
 @dataclass
@@ -221,7 +213,7 @@ class SCPSettings:
     numerical failures of the convex solver in a row are retried with a smaller trust region. ``iterative_refinement``
     refines the interior-point backend's KKT solves (Clarabel's default). ``second_order`` enables the end game
     (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance`` bounds the relative stationarity and complementarity at
-    convergence (:mod:`convexguid.scp.kkt`); ``funnel`` lets a funnel take steps the merit refuses
+    convergence (:mod:`convexguid.scp.optimality`); ``funnel`` lets a funnel take steps the merit refuses
     (:class:`~convexguid.scp.policies.FunnelPolicy`)."""
 
     backend: str = "auto"

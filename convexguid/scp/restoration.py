@@ -1,10 +1,9 @@
-"""Start points the SCP can step from, and certificates when there are none.
-
-:func:`restore_start` moves a start that breaks the hard linear constraints ``A x = b, G x <= h`` (every subproblem
-keeps them) to the nearest point that meets them, or certifies that there is none. :func:`run_phase1` is the
-nonlinear counterpart: the same engine with the objective dropped minimises the :math:`\\ell_1` violation alone, and a
-stall with the violation positive is a local certificate of infeasibility (Nocedal & Wright, *Numerical
-Optimization*, 2nd ed., Sec. 17.2 and 18.5 on elastic modes; docs/engine.md, 'Restoration and phase 1').
+"""Start points the SCP can step from, and certificates when there are none. :func:`restore_start` moves a start that
+breaks the hard linear constraints ``A x = b, G x <= h`` (every subproblem keeps them) to the nearest point that meets
+them, or certifies that there is none. :func:`run_phase1` is the nonlinear counterpart: the same engine with the
+objective dropped minimises the :math:`\\ell_1` violation alone, and a stall with the violation positive is a local
+certificate of infeasibility (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.2 and 18.5 on elastic modes;
+docs/engine.md, 'Restoration and phase 1').
 """
 
 from __future__ import annotations
