@@ -142,7 +142,8 @@ class Solution:
     timing: dict[str, float] = field(default_factory=dict)
     repair_rounds: list[RepairRound] = field(default_factory=list)
     kkt: dict | None = None
-    """KKT residuals of the planned iterate (:meth:`convexguid.scp.kkt.KKTResiduals.summary`); None when not planned."""
+    """KKT residuals of the planned iterate (:meth:`convexguid.scp.optimality.KKTResiduals.summary`); None when not
+    planned."""
 
     @property
     def ok(self) -> bool:
@@ -185,7 +186,7 @@ class Solution:
             "solver": self.solver,
             "timing": self.timing,
             "verification": self.verification.to_dict() if self.verification else None,
-            "repair_rounds": [r.to_dict() for r in self.repair_rounds],
+            "repair_rounds": [dataclasses.asdict(r) for r in self.repair_rounds],
             "kkt": self.kkt,
         }
         if self.figures is not None:

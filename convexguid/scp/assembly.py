@@ -1,9 +1,7 @@
-"""Assembly of the convex subproblem with a sparsity pattern fixed once.
-
-Its variables are ``z = [d, y, s_o, s_g, t_+, t_-, s_c]``: the step ``d`` from the iterate ``x``, the lifted
-residuals ``y`` (linearized :math:`r`), and nonnegative slacks on the output constraints, the linearized inequalities,
-either side of the linearized equalities and on each second-order cone (an exact l1 penalty, so every subproblem is
-feasible):
+"""Assembly of the convex subproblem with a sparsity pattern fixed once. Its variables are ``z = [d, y, s_o, s_g, t_+,
+t_-, s_c]``: the step ``d`` from the iterate ``x``, the lifted residuals ``y`` (linearized :math:`r`), and nonnegative
+slacks on the output constraints, the linearized inequalities, either side of the linearized equalities and on each
+second-order cone (an exact l1 penalty, so every subproblem is feasible):
 
 .. math::
 
@@ -23,14 +21,12 @@ numbers (why this form: docs/engine.md, 'Subproblem assembly: lifted and condens
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import Cones, ConicProgram
 from convexguid.scp.lagrangian import Multipliers
-from convexguid.scp.problem import ConstraintBlock, Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, stacked_values
 
 
 class _Pattern:
@@ -41,31 +37,31 @@ class _Pattern:
         self._rows: list[np.ndarray] = []
         self._cols: list[np.ndarray] = []
 
-    def add_dense(self, row0: int, col0: int, nrows: int, ncols: int) -> None:
-        r, c = np.meshgrid(np.arange(nrows), np.arange(ncols), indexing="ij")
-        self._rows.append(row0 + r.ravel())
-        self._cols.append(col0 + c.ravel())
-
     def add_entries(self, rows: np.ndarray, cols: np.ndarray) -> None:
         self._rows.append(np.asarray(rows, dtype=int))
         self._cols.append(np.asarray(cols, dtype=int))
 
+    def add_dense(self, row0: int, col0: int, nrows: int, ncols: int) -> None:
+        r, c = np.meshgrid(np.arange(nrows), np.arange(ncols), indexing="ij")
+        self.add_entries(row0 + r.ravel(), col0 + c.ravel())
+
     def add_diagonal(self, row0: int, col0: int, size: int) -> None:
-        self._rows.append(row0 + np.arange(size))
-        self._cols.append(col0 + np.arange(size))
+        self.add_entries(row0 + np.arange(size), col0 + np.arange(size))
 
     def add_sparse(self, row0: int, col0: int, matrix: sp.spmatrix) -> None:
         coo = sp.coo_matrix(matrix)
-        self._rows.append(row0 + coo.row)
-        self._cols.append(col0 + coo.col)
+        self.add_entries(row0 + coo.row, col0 + coo.col)
 
     def finish(self) -> None:
+        """Fix the pattern: ``indices`` and ``indptr`` in the integer type scipy keeps for them (int32 where the sizes
+        allow), so the matrix made at every iteration takes them neither converted nor scanned (docs/engine.md)."""
         rows, cols = np.concatenate(self._rows), np.concatenate(self._cols)
         # by column, then row: the order np.lexsort((rows, cols)) gives, found by a stable sort of one key
         self._order = np.argsort(cols * self.shape[0] + rows, kind="stable")
-        counts = np.bincount(cols, minlength=self.shape[1])
-        self.indices, self.indptr = csc_index_arrays(rows[self._order], np.concatenate([[0], np.cumsum(counts)]),
-                                                     self.shape)
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.shape[1]))])
+        # scipy's rule for the (data, indices, indptr) form
+        dtype = np.int32 if max(*self.shape, rows.size) <= np.iinfo(np.int32).max else np.int64
+        self.indices, self.indptr = np.asarray(rows[self._order], dtype=dtype), np.asarray(indptr, dtype=dtype)
 
     def matrix(self, block_values: list[np.ndarray]) -> sp.csc_matrix:
         data = np.concatenate([np.ravel(v) for v in block_values])[self._order]
@@ -80,12 +76,11 @@ class SubproblemRows:
     on the step, dense."""
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
-                 scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
-                 curvature: tuple[np.ndarray, np.ndarray] | None, lifted: bool) -> None:
+                 scale: np.ndarray, weights: np.ndarray, curvature: tuple[np.ndarray, np.ndarray] | None,
+                 lifted: bool) -> None:
         self.n, self.m = n, first.residuals.size
         self.linear = linear = linear.sparse()
-        self.outputs, self.scale, self.linear_cost, self.weights = outputs, scale, linear_cost, weights
-        self.curvature = curvature
+        self.outputs, self.scale, self.weights, self.curvature = outputs, scale, weights, curvature
         self.n_ineq = sum(b.values.size for b in first.inequalities)
         self.n_eq = sum(b.values.size for b in first.equalities)
         cone_sizes = tuple(size for block in first.cones for size in block.sizes)
@@ -96,11 +91,14 @@ class SubproblemRows:
         zero_eq, pair_rows, eq_slacks = (self.n_eq, 0, 2 * self.n_eq) if lifted else (0, self.n_eq, self.n_eq)
         self.n_slack = n_o + self.n_ineq + eq_slacks + self.n_cones
         self.num_z = n + lifted_rows + self.n_slack
-        so0 = n + lifted_rows
+        so0 = n + lifted_rows  # the first output, inequality and equality slack columns
         sg0, t0 = so0 + n_o, so0 + n_o + self.n_ineq
         self.cones = Cones(zero=n_a + lifted_rows + zero_eq,
                            nonneg=n_g + n_o + self.n_ineq + 2 * pair_rows + self.n_slack + 2 * n, soc=cone_sizes)
-        self.layout = DualLayout(n_a, lifted_rows, n_g, n_o, self.n_ineq, self.n_eq, sum(cone_sizes), lifted)
+        # the rows of each multiplier among the duals: the zero cone's A, J d - y = -r and (lifted) equalities, then
+        # the nonnegative cone's G, outputs, inequalities and (condensed) equalities as + and - rows; the cones last
+        self._dual_sizes = [n_a, lifted_rows, zero_eq, n_g, n_o, self.n_ineq, pair_rows, pair_rows]
+        self._cone_rows = sum(cone_sizes)
         pat = _Pattern((self.cones.rows, self.num_z))
         # zero cone: A d = b - A x (; J d - y = -r; the equalities, whose entries the pattern takes last)
         _add_jacobian(pat, 0, linear.A, n_a, n)
@@ -108,7 +106,8 @@ class SubproblemRows:
             _add_jacobian(pat, n_a, first.residual_jacobian, self.m, n)
             pat.add_diagonal(n_a, n, self.m)
         row = n_a + lifted_rows + zero_eq
-        # nonnegative cone, in order: G, the outputs less their slacks, then the softened rows and the trust region
+        # nonnegative cone, in order: G, the outputs, the linearized inequalities and the paired equalities (+, -),
+        # each less its slacks, then every slack's bound and the trust region on the step
         _add_jacobian(pat, row, linear.G, n_g, n)
         row += n_g
         if lifted:
@@ -116,8 +115,18 @@ class SubproblemRows:
         else:
             pat.add_dense(row, 0, n_o, n)
         pat.add_diagonal(row, so0, n_o)
-        row = _add_softened_rows(pat, row + n_o, first, n, (so0, sg0, t0), (self.n_ineq, pair_rows, self.n_slack))
-        _add_cone_rows(pat, row, first.cones, cone_sizes, t0 + eq_slacks, n)
+        row = _add_blocks(pat, row + n_o, first.inequalities, n)
+        pat.add_diagonal(row - self.n_ineq, sg0, self.n_ineq)
+        for _ in range(2 if pair_rows else 0):
+            row = _add_blocks(pat, row, first.equalities, n)
+            pat.add_diagonal(row - pair_rows, t0, pair_rows)
+        pat.add_diagonal(row, so0, self.n_slack)
+        row += self.n_slack
+        pat.add_diagonal(row, 0, n)
+        pat.add_diagonal(row + n, 0, n)
+        # the second-order cones: each cone's map v + F d, and its slack on its first row
+        row = _add_blocks(pat, row + 2 * n, first.cones, n) - self._cone_rows
+        pat.add_entries(row + np.cumsum((0, *cone_sizes))[:-1], t0 + eq_slacks + np.arange(self.n_cones))
         if lifted:  # e + J_e d - t+ + t- = 0
             _add_blocks(pat, n_a + lifted_rows, first.equalities, n)
             pat.add_diagonal(n_a + lifted_rows, t0, self.n_eq)
@@ -149,16 +158,21 @@ class SubproblemRows:
         room = lin.h - lin.G @ x
         # a hard inequality the iterate meets only to the backend's tolerance must not make d = 0 infeasible
         room[(room < 0) & (room > -1e-7 * (1 + np.abs(lin.h)))] = 0.0
-        e = _values(ev.equalities)
+        e = stacked_values(ev.equalities)
         lifted_rhs, output_rhs = head_rhs
         zero_eq, pairs = ([-e], []) if self.split else ([], [-e, e])
-        b = np.concatenate([lin.b - lin.A @ x, lifted_rhs, *zero_eq, room, output_rhs, -_values(ev.inequalities),
-                            *pairs, np.zeros(self.n_slack), np.broadcast_to(radius, 2 * self.n), _values(ev.cones)])
+        b = np.concatenate([lin.b - lin.A @ x, lifted_rhs, *zero_eq, room, output_rhs,
+                            -stacked_values(ev.inequalities), *pairs, np.zeros(self.n_slack),
+                            np.broadcast_to(radius, 2 * self.n), stacked_values(ev.cones)])
         return A, b
 
     def multipliers(self, z: np.ndarray) -> Multipliers:
-        """The nonlinear program's multipliers from the subproblem's row duals (see ``DualLayout``)."""
-        return self.layout.multipliers(z)
+        """The program's multipliers from the row duals (a condensed equality's: its ``+`` row's less its ``-``)."""
+        ends = np.cumsum(self._dual_sizes)
+        a, _, e, g, o, i, plus, minus = (z[end - size: end] for end, size in zip(ends, self._dual_sizes, strict=True))
+        cone = z[z.size - self._cone_rows:].copy() if self._cone_rows else np.zeros(0)
+        return Multipliers(equality=e.copy() if self.split else plus - minus, inequality=i.copy(), output=o.copy(),
+                           linear_equality=a.copy(), linear_inequality=g.copy(), cone=cone)
 
     def step(self, z: np.ndarray) -> np.ndarray:
         """The step ``d`` from a subproblem solution (whose first block is ``d`` in scaled units)."""
@@ -173,16 +187,15 @@ class SubproblemAssembler(SubproblemRows):
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
                  curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
-        super().__init__(n, first, linear, outputs, scale, linear_cost, weights, curvature, lifted=True)
+        super().__init__(n, first, linear, outputs, scale, weights, curvature, lifted=True)
         self._m_data = sp.coo_matrix(outputs.M).data
         # P: the curvature model's upper triangle on d (if any), then the residuals' diagonal 2W on y
         rows, cols = curvature if curvature is not None else (np.zeros(0, int), np.zeros(0, int))
-        rows, cols = np.concatenate([rows, np.arange(n, n + self.m)]), np.concatenate([cols, np.arange(n, n + self.m)])
-        self._p_order = np.lexsort((rows, cols))
-        self._p_rows, self._p_cols = rows, cols
-        self._p_indices, self._p_indptr = csc_index_arrays(
-            rows[self._p_order], np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.num_z))]),
-            (self.num_z, self.num_z))
+        diagonal = np.arange(n, n + self.m)
+        self._p_rows, self._p_cols = np.concatenate([rows, diagonal]), np.concatenate([cols, diagonal])
+        self._p_pattern = _Pattern((self.num_z, self.num_z))
+        self._p_pattern.add_entries(self._p_rows, self._p_cols)
+        self._p_pattern.finish()
         self._p_residual = 2.0 * weights
         self.q = np.concatenate([linear_cost, np.zeros(self.m), np.zeros(self.n_slack)])
 
@@ -197,73 +210,11 @@ class SubproblemAssembler(SubproblemRows):
         if self.curvature is not None:
             h = np.zeros(self.curvature[0].size) if hessian is None else hessian
             p_data = np.concatenate([h, p_data])
-        p_data = p_data * self._column_scale[self._p_rows] * self._column_scale[self._p_cols]
-        P = sp.csc_matrix((p_data[self._p_order], self._p_indices, self._p_indptr), shape=(self.num_z, self.num_z))
+        P = self._p_pattern.matrix([p_data * self._column_scale[self._p_rows] * self._column_scale[self._p_cols]])
         q = self.q.copy()
         q[self.n + self.m:] = penalty
         q *= self._column_scale
         return ConicProgram(P, q, A, b, self.cones)
-
-
-@dataclass(frozen=True)
-class DualLayout:
-    """Where each constraint's rows sit in a subproblem. Zero cone: ``A``, the lifted form's ``J d - y = -r`` rows
-    and (``split``) linearized equalities. Nonnegative cone: ``G``, outputs, linearized inequalities, the condensed
-    form's equalities as ``+`` and ``-`` rows (multiplier: their difference), slacks, trust region; then the cones."""
-
-    linear_equalities: int
-    residuals: int
-    linear_inequalities: int
-    outputs: int
-    inequalities: int
-    equalities: int
-    cone_rows: int = 0
-    split: bool = False
-
-    def multipliers(self, z: np.ndarray) -> Multipliers:
-        zero_eq, pair = (self.equalities, 0) if self.split else (0, self.equalities)
-        sizes = [self.linear_equalities, self.residuals, zero_eq, self.linear_inequalities, self.outputs,
-                 self.inequalities, pair, pair]
-        ends = np.cumsum(sizes)
-        a, _, e, g, o, i, plus, minus = (z[end - size: end] for end, size in zip(ends, sizes, strict=True))
-        cone = z[z.size - self.cone_rows:].copy() if self.cone_rows else np.zeros(0)
-        return Multipliers(equality=e.copy() if self.split else plus - minus, inequality=i.copy(), output=o.copy(),
-                           linear_equality=a.copy(), linear_inequality=g.copy(), cone=cone)
-
-
-def _add_softened_rows(pat: _Pattern, row: int, first: Evaluation, n: int, starts: tuple[int, int, int],
-                      counts: tuple[int, int, int]) -> int:
-    """The rows after the outputs: linearized inequalities and their slacks, paired equalities (``+``, ``-``) and
-    theirs, every slack's bound, the trust region on the step. ``starts``: the first output, inequality and equality
-    slack columns; ``counts``: inequality rows, paired equality rows, slacks. Returns the next row."""
-    so0, sg0, t0 = starts
-    n_ineq, n_eq, n_slack = counts
-    row = _add_blocks(pat, row, first.inequalities, n)
-    pat.add_diagonal(row - n_ineq, sg0, n_ineq)
-    for _ in range(2 if n_eq else 0):
-        row = _add_blocks(pat, row, first.equalities, n)
-        pat.add_diagonal(row - n_eq, t0, n_eq)
-    pat.add_diagonal(row, so0, n_slack)
-    row += n_slack
-    pat.add_diagonal(row, 0, n)
-    pat.add_diagonal(row + n, 0, n)
-    return row + 2 * n
-
-
-def _add_cone_rows(pat: _Pattern, row: int, cones: tuple, sizes: tuple[int, ...], slack0: int, n: int) -> None:
-    """The second-order cones' rows from ``row`` on: each cone's map :math:`v + F d`, its slack (columns from
-    ``slack0``, one a cone) on its first row."""
-    row = _add_blocks(pat, row, cones, n)
-    firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int) if sizes else np.zeros(0, int)
-    pat.add_entries(row - sum(sizes) + firsts, slack0 + np.arange(len(sizes)))
-
-
-def csc_index_arrays(indices: np.ndarray, indptr: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """A CSC pattern's ``(indices, indptr)`` in the integer type ``scipy.sparse`` keeps for it (int32 where the
-    sizes allow), so the matrix made at every iteration takes them neither converted nor scanned (docs/engine.md)."""
-    fits = max(*shape, len(indices)) <= np.iinfo(np.int32).max  # scipy's rule for the (data, indices, indptr) form
-    dtype = np.int32 if fits else np.int64
-    return np.asarray(indices, dtype=dtype), np.asarray(indptr, dtype=dtype)
 
 
 def _add_blocks(pat: _Pattern, row: int, blocks: tuple, n: int) -> int:
@@ -284,7 +235,3 @@ def _add_jacobian(pat: _Pattern, row0: int, jacobian: np.ndarray | sp.spmatrix |
 def _jacobian_data(jacobian: np.ndarray | sp.spmatrix) -> np.ndarray:
     """Values in pattern order: row-major for dense blocks, COO order for sparse ones."""
     return jacobian.data if sp.issparse(jacobian) else np.asarray(jacobian)
-
-
-def _values(blocks: tuple[ConstraintBlock, ...]) -> np.ndarray:
-    return np.concatenate([b.values for b in blocks]) if blocks else np.zeros(0)

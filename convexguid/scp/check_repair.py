@@ -1,21 +1,19 @@
-"""The check-repair-resolve loop every planned family shares.
-
-A converged SCP iterate meets its constraints only where the program imposes them, so :func:`solve_verified` runs
-solve, dense check, the repairs the family proposes and a warm re-solve from the last plan until the check passes or
-the repair budget is spent. The family (:class:`PlanChecker`) supplies ``check(program, x)``, its dense verification of
-the plan ``x``, and ``repair(program, x, check, attempt)``, a new program (tightened constraints, more check points, a
-finer mesh) with the plan carried over as its start, or ``None``; every round is recorded (:class:`RepairRound`).
-Statuses: ``converged`` only when the SCP converged and the dense check passed; ``unverified`` when the SCP ended
-``converged`` or ``unverified`` but the check still fails when the budget runs out or no repair is left (the worst
-violations named), when a repaired program ends ``infeasible`` (a certificate of the repair, not of the problem as
-stated), or when a plan not proved optimal passes its check (a failing one is repaired as a converged one is);
-otherwise the SCP's own status (``infeasible`` with its certificate, ``max_iterations``, ``solver_error``).
+"""The check-repair-resolve loop every planned family shares. A converged SCP iterate meets its constraints only where
+the program imposes them, so :func:`solve_verified` runs solve, dense check, the repairs the family proposes and a warm
+re-solve from the last plan until the check passes or the repair budget is spent. The family (:class:`PlanChecker`)
+supplies ``check(program, x)``, its dense verification of the plan ``x``, and ``repair(program, x, check, attempt)``, a
+new program (tightened constraints, more check points, a finer mesh) with the plan carried over as its start, or
+``None``; every round is recorded (:class:`RepairRound`). Statuses: ``converged`` only when the SCP converged and the
+dense check passed; ``unverified`` when the SCP ended ``converged`` or ``unverified`` but the check still fails when the
+budget runs out or no repair is left (the worst violations named), when a repaired program ends ``infeasible`` (a
+certificate of the repair, not of the problem as stated), or when a plan not proved optimal passes its check (a failing
+one is repaired as a converged one is); otherwise the SCP's own status (``infeasible`` with its certificate,
+``max_iterations``, ``solver_error``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -55,7 +53,6 @@ class PlanChecker(Protocol):
     """The family's side of the loop."""
 
     def check(self, program: NonconvexProgram, x: np.ndarray) -> Check: ...
-
     def repair(self, program: NonconvexProgram, x: np.ndarray, check: Check, attempt: int) -> Repair | None: ...
 
 
@@ -86,9 +83,6 @@ class RepairRound:
     max_violation: float
     final_state_error: float
     worst: str
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 @dataclass
@@ -141,11 +135,10 @@ class PlanFollower:
 
 
 def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: PlanChecker, log: Log | None = None,
-                   budget: int = DEFAULT_REPAIR_BUDGET, x0: np.ndarray | None = None,
-                   on_round: Callable[[RepairRound], None] | None = None) -> VerifiedSolve:
+                   budget: int = DEFAULT_REPAIR_BUDGET) -> VerifiedSolve:
     """Solve, check densely, repair and re-solve warm until verified or ``budget`` repairs are spent."""
     follower = PlanFollower(program)
-    result = last = SCPAlgorithm(program, settings, log).run(x0, until=follower)
+    result = last = SCPAlgorithm(program, settings, log).run(until=follower)
     what = "first solve"
     if follower.rescaled is not None:  # the same plan, measured in the scales its size gives (warm, as a repair)
         program = follower.rescaled
@@ -154,44 +147,42 @@ def solve_verified(program: NonconvexProgram, settings: SCPSettings, checker: Pl
         last = SCPAlgorithm(program, settings, log).run(result.x, penalty=result.penalty)
         result = merge_results(result, last)
     rounds: list[RepairRound] = []
+
+    def ended(status: str, message: str, check: Check | None) -> VerifiedSolve:
+        return VerifiedSolve(program, result, check, status, message, rounds)
+
     for attempt in range(budget + 1):
         report("dense check, round", attempt + 1)
         try:
             check = checker.check(program, result.x)
         except SolverError as error:
             if result.status in ("converged", "unverified"):  # a plan the dense check cannot judge is not verified
-                return VerifiedSolve(program, result, None, "unverified", f"{result.message}; not verified: {error}",
-                                     rounds)
+                return ended("unverified", f"{result.message}; not verified: {error}", None)
             # the last iterate of a failed solve may not even propagate; its status says why
-            return VerifiedSolve(program, result, None, result.status, result.message, rounds)
+            return ended(result.status, result.message, None)
         v = check.verification
         rounds.append(RepairRound(attempt, what, result.status, last.iterations, result.objective, v.passed,
                                   v.max_violation, v.final_state_error, worst_violations(v)))
-        if on_round is not None:
-            on_round(rounds[-1])
-        if result.status == "infeasible" and attempt > 0:
-            # a certificate of the repaired program (tightened, or regridded), not of the problem as stated
-            return VerifiedSolve(program, result, check, "unverified",
-                                 f"after the repair '{what}' the SCP found no feasible point ({result.message}); "
-                                 "the problem as stated is not proved infeasible", rounds)
+        if result.status == "infeasible" and attempt > 0:  # a certificate of the repaired program
+            return ended("unverified", f"after the repair '{what}' the SCP found no feasible point "
+                                       f"({result.message}); the problem as stated is not proved infeasible", check)
         if result.status not in ("converged", "unverified"):
             # infeasible, max_iterations, solver_error: the check of the last iterate is reported, not repaired
-            return VerifiedSolve(program, result, check, result.status, result.message, rounds)
+            return ended(result.status, result.message, check)
         if result.status == "unverified" and (v.passed or result.max_violation > settings.feasibility_tolerance):
             # a feasible plan not proved optimal, or a stall short of feasibility: nothing a repair could mend
-            return VerifiedSolve(program, result, check, "unverified", result.message, rounds)
+            return ended("unverified", result.message, check)
         if v.passed:
             rounds_text = f"{attempt} repair round{'s' if attempt > 1 else ''}"
             message = result.message if attempt == 0 else f"{result.message}; verified after {rounds_text}" + \
                 repair_cost(rounds[0].objective, result.objective)
-            message = "; ".join([message, *v.remarks])  # how the plan was judged, when not as usual
-            return VerifiedSolve(program, result, check, "converged", message, rounds)
+            # the remarks: how the plan was judged, when not as usual
+            return ended("converged", "; ".join([message, *v.remarks]), check)
         repair = checker.repair(program, result.x, check, attempt) if attempt < budget else None
         if repair is None:
             why = "repair budget spent" if attempt == budget else "no repair left to try"
-            return VerifiedSolve(program, result, check, "unverified",
-                                 f"the dense check fails after {attempt} repair rounds ({why}): {worst_violations(v)}",
-                                 rounds)
+            return ended("unverified", f"the dense check fails after {attempt} repair rounds ({why}): "
+                                       f"{worst_violations(v)}", check)
         program, what = repair.program, repair.description
         # warm: the plan and the penalty weight carry over (the repaired program's multipliers are much the same)
         last = SCPAlgorithm(program, settings, log).run(repair.x0, penalty=result.penalty)

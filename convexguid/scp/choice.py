@@ -1,10 +1,9 @@
-"""Which subproblem assembly and which backend an SCP run uses (``backend: auto`` and explicit names).
-
-``auto`` decides once per run, from the program's first evaluation: the condensed subproblem
-(:mod:`convexguid.scp.condensed`) with DAQP for a small program (``DENSE_MAX_VARIABLES``) with weighted residuals and
-dense Jacobians (``DENSE_MIN_DENSITY``); otherwise the lifted one (:mod:`convexguid.scp.assembly`) with PIQP, or with
-Clarabel when it has second-order cones; Clarabel re-solves an answer of DAQP or PIQP that is not ``optimal``. An
-explicit name: the condensed subproblem for ``daqp``, the lifted one for any other.
+"""Which subproblem assembly and which backend an SCP run uses (``backend: auto`` and explicit names). ``auto`` decides
+once per run, from the program's first evaluation: the condensed subproblem (:mod:`convexguid.scp.condensed`) with DAQP
+for a small program (``DENSE_MAX_VARIABLES``) with weighted residuals and dense Jacobians (``DENSE_MIN_DENSITY``);
+otherwise the lifted one (:mod:`convexguid.scp.assembly`) with PIQP, or with Clarabel when it has second-order cones;
+Clarabel re-solves an answer of DAQP or PIQP that is not ``optimal``. An explicit name: the condensed subproblem for
+``daqp``, the lifted one for any other.
 """
 
 from __future__ import annotations
@@ -30,14 +29,10 @@ class SubproblemChoice:
 
 def jacobian_density(first: Evaluation) -> float:
     """Share of nonzeros in the Jacobians of the residuals and of the nonlinear constraints."""
-    blocks = [first.residual_jacobian, *(b.jacobian for b in (*first.inequalities, *first.equalities))]
-    nnz = size = 0
-    for block in blocks:
-        if block is None:
-            continue
-        rows, cols = block.shape
-        size += rows * cols
-        nnz += block.nnz if sp.issparse(block) else int(np.count_nonzero(block))
+    blocks = [b for b in (first.residual_jacobian, *(b.jacobian for b in (*first.inequalities, *first.equalities)))
+              if b is not None]
+    size = sum(b.shape[0] * b.shape[1] for b in blocks)
+    nnz = sum(b.nnz if sp.issparse(b) else int(np.count_nonzero(b)) for b in blocks)
     return nnz / size if size else 0.0
 
 

@@ -1,8 +1,7 @@
-"""The trust-region subproblem with the lifted residuals eliminated (the condensed form).
-
-When :math:`n` is small and the Jacobians are dense, substituting the lifted :math:`y = r + J d` of
-:mod:`convexguid.scp.assembly` leaves a small dense QP in the scaled step :math:`u = S^{-1} d`
-(:math:`S = \\operatorname{diag}\\sigma`), with variables ``z = [u, s_o, s_g, t, s_c]``:
+"""The trust-region subproblem with the lifted residuals eliminated (the condensed form). When :math:`n` is small and
+the Jacobians are dense, substituting the lifted :math:`y = r + J d` of :mod:`convexguid.scp.assembly` leaves a small
+dense QP in the scaled step :math:`u = S^{-1} d` (:math:`S = \\operatorname{diag}\\sigma`), with variables ``z = [u,
+s_o, s_g, t, s_c]``:
 
 .. math::
 
@@ -28,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.backends import ConicProgram
-from convexguid.scp.assembly import SubproblemRows, _jacobian_data, csc_index_arrays
+from convexguid.scp.assembly import SubproblemRows, _jacobian_data, _Pattern
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
 
 
@@ -43,31 +42,27 @@ class CurvedTerms:
 
 
 class CondensedAssembler(SubproblemRows):
-    """Builds the condensed trust-region subproblem (the interface of ``SubproblemAssembler``): the lifted form's rows
-    less ``J d - y = -r``, the output rows ``M J`` dense on ``u``; ``P`` dense on ``u``, zero on the slacks. A program
-    with cones goes to a conic backend (the curved subproblem's Clarabel); the dense one takes none."""
+    """Builds the condensed trust-region subproblem: the output rows ``M J`` dense on ``u``; ``P`` dense on ``u``, zero
+    on the slacks. With cones it needs a conic backend (the curved subproblem's Clarabel): the dense one takes none."""
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, linear_cost: np.ndarray, weights: np.ndarray,
                  curvature: tuple[np.ndarray, np.ndarray] | None = None) -> None:
-        super().__init__(n, first, linear, outputs, scale, linear_cost, weights, curvature, lifted=False)
+        super().__init__(n, first, linear, outputs, scale, weights, curvature, lifted=False)
         self._M = sp.csr_matrix(outputs.M)
         # P: the dense upper triangle of the u block
-        self._p_rows, self._p_cols = np.triu_indices(n)
-        order = np.lexsort((self._p_rows, self._p_cols))
-        self._p_rows, self._p_cols = self._p_rows[order], self._p_cols[order]
-        counts = np.bincount(self._p_cols, minlength=self.num_z)
-        self._p_indices, self._p_indptr = csc_index_arrays(self._p_rows, np.concatenate([[0], np.cumsum(counts)]),
-                                                           (self.num_z, self.num_z))
+        rows, cols = np.triu_indices(n)
+        self._p_pattern = _Pattern((self.num_z, self.num_z))
+        self._p_pattern.add_entries(rows, cols)
+        self._p_pattern.finish()
+        self._p_flat = rows * n + cols  # the upper triangle's entries in the dense Hessian
         self._cost_u = np.asarray(linear_cost, dtype=float) * scale
-        self._p_flat = self._p_rows * n + self._p_cols  # the upper triangle's entries in the dense Hessian, CSC order
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
               hessian: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on the
-        pattern ``curvature``, positive semidefinite). ``curved`` replaces the model's whole Hessian in ``u`` (scaled,
-        positive semidefinite, Gauss-Newton part included) and adds its linear and constant terms
-        (:mod:`convexguid.scp.curved`)."""
+        """The subproblem about ``x`` (as :meth:`~convexguid.scp.assembly.SubproblemAssembler.build` makes it);
+        ``curved`` replaces its whole Hessian in ``u`` (scaled, positive semidefinite, Gauss-Newton part included) and
+        adds its linear and constant terms (:mod:`convexguid.scp.curved`)."""
         n, scale = self.n, self.scale
         r = ev.residuals
         jac = ev.residual_jacobian
@@ -76,21 +71,18 @@ class CondensedAssembler(SubproblemRows):
         A, b = self.constraints(x, ev, radius, head, [np.zeros(0), self.outputs.m - self._M @ r])
         J_u = J * scale
         WJ = self.weights[:, None] * J_u
-        if curved is None:
-            hess = 2.0 * (J_u.T @ WJ)
-            if self.curvature is not None and hessian is not None:
-                rows, cols = self.curvature
-                entries = hessian * scale[rows] * scale[cols]
-                np.add.at(hess, (rows, cols), entries)
-                off = rows != cols
-                np.add.at(hess, (cols[off], rows[off]), entries[off])
-            P = self._dense_p(hess)
-        elif sp.issparse(curved.hessian):
+        hess = 2.0 * (J_u.T @ WJ) if curved is None else curved.hessian
+        if curved is None and self.curvature is not None and hessian is not None:
+            rows, cols = self.curvature
+            entries = hessian * scale[rows] * scale[cols]
+            np.add.at(hess, (rows, cols), entries)
+            off = rows != cols
+            np.add.at(hess, (cols[off], rows[off]), entries[off])
+        if sp.issparse(hess):
             # a sparse curved Hessian keeps its own pattern (the program is then set up afresh, not updated)
-            P = sp.block_diag([sp.triu(curved.hessian), sp.csc_matrix((self.num_z - n, self.num_z - n))],
-                              format="csc")
-        else:
-            P = self._dense_p(curved.hessian)
+            P = sp.block_diag([sp.triu(hess), sp.csc_matrix((self.num_z - n, self.num_z - n))], format="csc")
+        else:  # on the fixed dense pattern: the upper triangle on u, zero on the slacks
+            P = self._p_pattern.matrix([hess.ravel()[self._p_flat]])
         q = np.full(self.num_z, float(penalty))
         q[:n] = 2.0 * (WJ.T @ r) + self._cost_u
         constant = float(self.weights @ r**2)
@@ -98,8 +90,3 @@ class CondensedAssembler(SubproblemRows):
             q[:n] += curved.linear
             constant += curved.constant
         return ConicProgram(P, q, A, b, self.cones, constant=constant)
-
-    def _dense_p(self, hessian: np.ndarray) -> sp.csc_matrix:
-        """``P`` on the fixed dense pattern: ``hessian``'s upper triangle on ``u``, zero on the slacks."""
-        return sp.csc_matrix((hessian.ravel()[self._p_flat], self._p_indices, self._p_indptr),
-                             shape=(self.num_z, self.num_z))

@@ -1,6 +1,5 @@
-"""The curved subproblem: the trust-region QP with the Lagrangian's Hessian, made convex (the end game's SQP step).
-
-Near a feasible point a program's sparse curvature model misses the curvature that lives only in the coupling of the
+"""The curved subproblem: the trust-region QP with the Lagrangian's Hessian, made convex (the end game's SQP step). Near
+a feasible point a program's sparse curvature model misses the curvature that lives only in the coupling of the
 constraints (a bilinear term such as catalyst mixing's :math:`u x` or a quaternion's :math:`\\Omega(\\omega) q`), and
 the steps stay pinned to the trust region. So at a feasible stall short of the KKT tolerance, and on a program of at
 most :data:`CURVED_SIZE` variables within :data:`CURVED_VIOLATION` tolerances of feasibility once :data:`CRAWL` linear
@@ -56,11 +55,10 @@ and QP); a larger one takes it only at a feasible stall (measured: docs/engine.m
 
 def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTATION
                 ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
-    """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows``, its negative eigenvalues raised to
-    zero (the trust region bounds the step where no curvature does); :math:`\\gamma`; and the same matrix as the
-    augmented Hessian :math:`H_\\gamma` (as sparse as ``hessian`` and the rows) plus :math:`F F^T`, ``F`` one
-    column :math:`\\sqrt{-\\lambda}\\, v` per negative eigenpair: the form :func:`with_low_rank` hands a sparse
-    backend."""
+    """``hessian`` (symmetric, scaled) plus :math:`\\gamma A^T A` over ``rows``, its negative eigenvalues raised to zero
+    (the trust region bounds the step where no curvature does); :math:`\\gamma`; and the same matrix as the augmented
+    Hessian :math:`H_\\gamma` (as sparse as ``hessian`` and the rows) plus :math:`F F^T`, ``F`` one column
+    :math:`\\sqrt{-\\lambda}\\, v` per negative eigenpair: the form :func:`with_low_rank` hands a sparse backend."""
     H = 0.5 * (hessian + hessian.T)
     size = max(float(np.max(np.abs(H), initial=0.0)), 1e-12)
     gamma = 0.0
@@ -79,9 +77,8 @@ def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTAT
 
 def with_low_rank(program: ConicProgram, n: int, factor: np.ndarray) -> ConicProgram:
     """``program`` (its first ``n`` variables the step ``u``) with :math:`\\tfrac12 \\|F^T u\\|^2` added to its
-    objective as :math:`\\tfrac12 \\|w\\|^2` over new last variables :math:`w = F^T u` (equality rows put first):
-    a sparse Hessian plus a few dense directions stays sparse for the backend, where the eigen-clipped matrix is
-    dense (docs/engine.md, 'Curved subproblem')."""
+    objective as :math:`\\tfrac12 \\|w\\|^2` over new last variables :math:`w = F^T u` (equality rows put first),
+    which keeps it sparse (docs/engine.md, 'Curved subproblem')."""
     rank, size = factor.shape[1], program.num_variables
     if rank == 0:
         return program
@@ -137,23 +134,16 @@ class CurvedSubproblem:
         choice = self.algo.choice
         return ("daqp", "clarabel") if choice is not None and choice.backend == "daqp" else ("clarabel", None)
 
-    def wanted(self, state: IterationState) -> bool:
-        """Whether this iteration takes the curved step: at a feasible stall short of the KKT tolerance (the polish),
-        or on a small program near feasibility whose linear steps keep reaching the trust region."""
+    def model(self, state: IterationState) -> CurvedModel | None:
+        """:math:`\\bar H` at the iterate and the rows it is augmented with, if this iteration takes the curved step
+        (see the module docstring; not before any multipliers)."""
         algo = self.algo
         near = max_violation(state.ev) <= CURVED_VIOLATION * algo.settings.feasibility_tolerance
-        return bool(state.polish) or (near and state.pinned >= CRAWL and not algo.phase1
-                                      and algo.program.num_variables <= CURVED_SIZE)
-
-    def hessian(self, state: IterationState) -> CurvedModel | None:
-        """:math:`\\bar H` at the iterate and the rows it is augmented with (None before any multipliers)."""
-        algo = self.algo
-        if state.multipliers is None:
+        crawling = near and state.pinned >= CRAWL and not algo.phase1 and algo.program.num_variables <= CURVED_SIZE
+        if state.multipliers is None or not (state.polish or crawling):
             return None
-        working = strongly_active(algo.second_order.working_set(state.x, state.raw, state.multipliers,
-                                                                algo.settings.feasibility_tolerance, state.penalty),
-                                  state.multipliers)
-        model = algo.second_order.at(state.x, state.raw, state.multipliers, working)
+        working = strongly_active(algo.second_order.working_set(state), state.multipliers)
+        model = algo.second_order.at(state, working)
         weight = POLISH_AUGMENTATION if state.polish else AUGMENTATION
         return CurvedModel(*convexified(model.hessian, model.rows, weight), model.rows, working)
 

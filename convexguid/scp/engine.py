@@ -1,6 +1,5 @@
-"""The sequential convex programming iteration shared by every problem family.
-
-:class:`SCPAlgorithm` is an explicit state machine: :meth:`~SCPAlgorithm.initialize` turns a start point into an
+"""The sequential convex programming iteration shared by every problem family. :class:`SCPAlgorithm` is an explicit
+state machine: :meth:`~SCPAlgorithm.initialize` turns a start point into an
 :class:`~convexguid.scp.state.IterationState`, and each :meth:`~SCPAlgorithm.step`
 
 1. convexifies: the nonlinear maps and their Jacobians at the iterate (already in the state);
@@ -16,7 +15,7 @@
 
 The objective's residuals are linearized (Gauss-Newton); a program may add a convex model of its constraints'
 curvature (``curvature_model``, weighted by the last multipliers: an S :math:`\\ell_1` QP step, Fletcher 1985). Near a
-feasible point the end game adds Newton's step (:mod:`convexguid.scp.newton`) and the curved subproblem
+feasible point the end game adds Newton's step (:mod:`convexguid.scp.endgame`) and the curved subproblem
 (:mod:`convexguid.scp.curved`). Statuses: ``converged`` only at a feasible KKT point (:mod:`convexguid.scp.optimality`);
 ``unverified`` when its KKT residuals stay above tolerance after :data:`POLISH_ITERATIONS` more stalls; ``infeasible``
 only with a certificate (:mod:`convexguid.scp.restoration`); ``max_iterations``; ``solver_error`` after more than
@@ -28,6 +27,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -38,18 +38,10 @@ from convexguid.scp.assembly import SubproblemAssembler
 from convexguid.scp.choice import SubproblemChoice, choose_subproblem
 from convexguid.scp.condensed import CondensedAssembler
 from convexguid.scp.curved import CurvedModel, CurvedSubproblem
-from convexguid.scp.endgame import SecondOrderModels, linearized_violation
+from convexguid.scp.endgame import Candidate, SecondOrderModels, linearized_violation, newton_candidate
 from convexguid.scp.evaluations import ProgramEvaluations, not_finite
-from convexguid.scp.lagrangian import MAX_DENSE_SIZE, CurvatureWeights, has_jacobian
-from convexguid.scp.merit import (
-    decrease_ratio,
-    describe_violations,
-    max_violation,
-    objective_value,
-    penalty_sum,
-    violation_by_block,
-)
-from convexguid.scp.newton import Candidate, newton_candidate
+from convexguid.scp.lagrangian import MAX_DENSE_SIZE, has_jacobian
+from convexguid.scp.merit import decrease_ratio, describe_violations, max_violation, penalty_sum, violation_by_block
 from convexguid.scp.optimality import (
     certified_by_least_squares,
     certified_here,
@@ -84,6 +76,16 @@ steps) before it is reported ``unverified``; at 20 a run along a long flat valle
 (docs/engine.md, 'KKT certificates and the polish')."""
 
 
+class Trial(NamedTuple):
+    """A trial point: ``raw`` the program's evaluation there, ``ev`` the merit's (see ``SCPAlgorithm._evaluate``)."""
+
+    x: np.ndarray
+    raw: Evaluation
+    ev: Evaluation
+    merit: float
+    ratio: float
+
+
 class SCPAlgorithm:
     """The SCP loop on one program: ``state = initialize(x0)``, then ``step(state)`` until finished. ``phase1``
     marks the elastic phase-1 run (objective dropped): a stall with constraints violated then ends ``infeasible``
@@ -113,7 +115,7 @@ class SCPAlgorithm:
         self.choice: SubproblemChoice | None = None
         self.backend: Backend | None = None
         self.feasibility_backend: Backend | None = None  # the least violation in the step's region
-        self.objective_at_start = self.objective_size = 0.0
+        self.objective_size = 0.0
 
     def _evaluate(self, state: IterationState | None, x: np.ndarray, jacobians: bool) -> tuple[Evaluation, Evaluation]:
         """The program's own evaluation, and one that also lists the output constraints' values and the cones'
@@ -127,7 +129,8 @@ class SCPAlgorithm:
         return raw, ev
 
     def objective(self, ev: Evaluation, x: np.ndarray) -> float:
-        return objective_value(ev, self.weights, self.cost, x)
+        """:math:`f(x) = \\sum_i w_i r_i^2 + c^T x`."""
+        return float(self.weights @ ev.residuals**2 + self.cost @ x)
 
     def merit(self, ev: Evaluation, x: np.ndarray, rho: float) -> float:
         return self.objective(ev, x) + rho * penalty_sum(ev)
@@ -139,20 +142,17 @@ class SCPAlgorithm:
         started = time.perf_counter()
         x = np.asarray(self.program.initial_guess() if x0 is None else x0, dtype=float)
         restored = restore_start(self.program, x)
-        infeasible = not restored.feasible
-        x = x if infeasible else restored.x
+        x = restored.x if restored.feasible else x
         raw, ev = self._evaluate(None, x, jacobians=True)
-        self.objective_at_start = self.objective(ev, x)
+        objective = self.objective(ev, x)
         # the unit of the penalty weights (PenaltyPolicy): a terminal cost that is zero at the start has a size
-        self.objective_size = max(abs(self.objective_at_start), float(np.abs(self.cost) @ self.scale))
+        self.objective_size = max(abs(objective), float(np.abs(self.cost) @ self.scale))
         rho = self.penalty.initial(self.objective_size) if penalty is None else penalty
-        state = IterationState(x=x, raw=raw, ev=ev, objective=self.objective_at_start,
-                               merit=self.merit(ev, x, rho), penalty=rho, radius=self.settings.trust_region_max
-                               if getattr(self.program, "affine", False) else self.trust_region.initial,
-                               started=started,
-                               funnel=self.funnel.initial(penalty_sum(ev), warm=penalty is not None)
-                               if self.settings.funnel else None)
-        if infeasible:
+        radius = self.settings.trust_region_max if getattr(self.program, "affine", False) else self.trust_region.initial
+        funnel = self.funnel.initial(penalty_sum(ev), warm=penalty is not None) if self.settings.funnel else None
+        state = IterationState(x=x, raw=raw, ev=ev, objective=objective, merit=self.merit(ev, x, rho), penalty=rho,
+                               radius=radius, started=started, funnel=funnel)
+        if not restored.feasible:
             state.finish("infeasible", "certificate: " + restored.certificate)
         elif broken := not_finite(raw):
             state.finish("solver_error", f"the problem or its derivatives are not a number at the start point, in "
@@ -160,17 +160,14 @@ class SCPAlgorithm:
                                          "derivative at zero there? Start such a state away from it (a bound, a guess)")
         if self.assembler is None:
             # the assembly and the backend, decided once from the first evaluation (backend: auto)
-            self.choice = choose_subproblem(self.settings.backend, self.program.num_variables, raw, self.weights)
-            assembler = CondensedAssembler if self.choice.condensed else SubproblemAssembler
-            self.assembler = assembler(self.program.num_variables, raw, self.linear,
-                                       self.outputs, self.scale, self.cost, self.weights,
-                                       curvature=None if self.curvature is None
-                                       else (self.curvature.rows, self.curvature.cols))
             n = self.program.num_variables
+            self.choice = choose_subproblem(self.settings.backend, n, raw, self.weights)
+            assembler = CondensedAssembler if self.choice.condensed else SubproblemAssembler
+            pattern = None if self.curvature is None else (self.curvature.rows, self.curvature.cols)
+            self.assembler = assembler(n, raw, self.linear, self.outputs, self.scale, self.cost, self.weights, pattern)
             if (self.settings.second_order and hasattr(self.program, "lagrangian_hessian")
                     and has_jacobian(raw) and n <= MAX_DENSE_SIZE):
-                self.second_order = SecondOrderModels(self.program, self.linear, self.scale, self.weights,
-                                                      self.cost, self.outputs)
+                self.second_order = SecondOrderModels(self)
                 self.curved = CurvedSubproblem(self)
         return state
 
@@ -226,103 +223,92 @@ class SCPAlgorithm:
         """One SCP iteration (see the module docstring); returns ``state`` updated."""
         if state.finished:
             return state
-        s = self.settings
         report("SCP phase-1 iteration" if self.phase1 else "SCP iteration", state.iteration + 1)
         state.iteration += 1
         self._relax_penalty(state)
-        hessian = curved = None
-        if self.curved is not None and self.curved.wanted(state):
-            # near feasibility, or stalled short of the KKT tolerance: the SQP step with the convexified Hessian
-            curved = self.curved.hessian(state)
-        if self.curvature is not None and state.multipliers is not None:
-            hessian = self._curvature_values(state)
+        # 1-2. convexify and solve: the curved subproblem when wanted, the linear one when it is not or when it fails or
+        # sees no decrease (docs/engine.md, 'Curved subproblem')
+        curved = self.curved.model(state) if self.curved is not None else None
+        hessian = self._curvature_values(state)
         result, model = self._solve_subproblem(state, state.raw, hessian, curved)
         if curved is not None and (not result.usable or not state.merit - model > 0):
-            # the curved QP failed or sees no decrease: the linear subproblem (docs/engine.md, 'Curved subproblem')
             curved = None
             result, model = self._solve_subproblem(state, state.raw, hessian)
-        assembler = self.curved.assembler if curved is not None else self.assembler
         if not result.usable:
-            # numerical trouble (d = 0 is feasible: the start meets the hard constraints): retry a smaller subproblem
-            state.failures += 1
-            state.radius = self.trust_region.after_failure(state.radius)
-            self.record(state, 0.0, float("nan"), False, result)
-            if state.failures > self.settings.max_backend_failures:
-                broken = not_finite(state.raw)
-                state.finish("solver_error", f"backend {self.solver_label} returned {result.status} "
-                                             f"{state.failures} times in a row" + (
-                                                 f"; the linearization at the iterate is not a number in {broken}: "
-                                                 "a derivative undefined there (a norm or a root at zero?)"
-                                                 if broken else ""))
+            self._backend_failed(state, result)
             return self._check_limit(state)
         state.failures = 0
-        d = assembler.step(result.x)
+        assembler = self.curved.assembler if curved is not None else self.assembler
+        d, predicted = assembler.step(result.x), state.merit - model
         newton = None
         if result.z is not None:
             state.multipliers, state.augmented = assembler.multipliers(result.z), curved is not None
-            if certified_here(self, state, result, state.merit - model):
+            if certified_here(self, state, result, predicted):
                 return self._check_limit(state)
             t = time.perf_counter()
             newton = newton_candidate(self, state)
             state.convexify_time_s += time.perf_counter() - t
-        predicted = state.merit - model
-        x_new = state.x + d
-        raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
-        merit_new = self.merit(ev_new, x_new, state.penalty)
-        ratio = decrease_ratio(state.merit - merit_new, predicted)
+        # 3. judge the step, corrected when its ratio is poor
+        trial = self.trial(state, state.x + d, state.penalty, state.merit, predicted)
         linearized = linearized_violation(state.raw, self.outputs, d)
         predicted_objective = state.objective - (model - state.penalty * linearized)
-        if self.correction.wanted(ratio, state.raw, raw_new):
-            corrected, _ = self._solve_subproblem(state, SecondOrderCorrection.shifted(state.raw, raw_new, d),
-                                                  hessian, curved)
+        if self.correction.wanted(trial.ratio, state.raw, trial.raw):
+            shifted = SecondOrderCorrection.shifted(state.raw, trial.raw, d)
+            corrected, _ = self._solve_subproblem(state, shifted, hessian, curved)
             if corrected.usable:
                 x_soc = state.x + assembler.step(corrected.x)
-                _, ev_soc = self._evaluate(state, x_soc, jacobians=False)
-                merit_soc = self.merit(ev_soc, x_soc, state.penalty)
-                ratio_soc = decrease_ratio(state.merit - merit_soc, predicted)
-                if ratio_soc > ratio:
-                    x_new, ev_new, merit_new, ratio = x_soc, ev_soc, merit_soc, ratio_soc
-                    d = x_new - state.x
+                soc = self.trial(state, x_soc, state.penalty, state.merit, predicted)
+                if soc.ratio > trial.ratio:
+                    trial, d = soc, soc.x - state.x
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
         if curved is None:
             state.pinned = state.pinned + 1 if step >= PINNED * state.radius else 0
         if newton is not None:
             if not newton.accepted:
                 state.newton_radius = 0.25 * newton.step
-            elif (newton.ratio >= self.trust_region.expand or ratio < s.accept_ratio
-                  or newton.merit <= self.merit(ev_new, x_new, newton.penalty)):
+            elif (newton.ratio >= self.trust_region.expand or trial.ratio < self.settings.accept_ratio
+                  or newton.merit <= self.merit(trial.ev, trial.x, newton.penalty)):
                 # the quadratic model predicted its merit well, or it does at least as well as the first-order point
                 self._take_newton(state, newton, result)
                 return self._check_limit(state)
-        accepted, ratio, state.funnel = self.judged(state, ratio, x_new, ev_new, predicted_objective, linearized)
-        steer = self._penalty_too_low(state, step, linearized, accepted, ev_new, hessian)
+        # 4. accept or reject, update the radius
+        accepted, ratio, state.funnel = self.judged(state, trial, predicted_objective, linearized)
+        steer = self._penalty_too_low(state, step, linearized, accepted, trial.ev, hessian)
         if accepted:
-            state.x, state.merit = x_new, merit_new
-            state.raw, state.ev = self._evaluate(state, state.x, jacobians=True)
-            state.objective = self.objective(state.ev, state.x)
+            self.move_to(state, trial.x, state.penalty, trial.merit)
             measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, ratio, step)
         self.record(state, step, ratio, accepted, result if curved is None else replace(result, status="curved"))
-        if self.phase1 and accepted and max_violation(state.ev) <= RESTORED * s.feasibility_tolerance:
+        # 5. stop, or raise the penalty
+        if self.phase1 and accepted and max_violation(state.ev) <= RESTORED * self.settings.feasibility_tolerance:
             state.finish("converged", "feasibility restored")
-            return self._check_limit(state)
-        if accepted and kkt_met(self, state):
+        elif accepted and kkt_met(self, state):
             finish_optimal(self, state)
-            return self._check_limit(state)
-        if accepted and curved is not None and certified_by_least_squares(self, state):
-            # the curved subproblem's own multipliers carry its augmentation (:mod:`convexguid.scp.curved`)
-            return self._check_limit(state)
-        if self._small(state, step, predicted):
+        elif accepted and curved is not None and certified_by_least_squares(self, state):
+            pass  # the curved subproblem's own multipliers carry its augmentation (:mod:`convexguid.scp.curved`)
+        elif self._small(state, step, predicted):
             self._stalled(state)
         elif steer:
             self._raise_penalty(state)
         return self._check_limit(state)
 
+    def _backend_failed(self, state: IterationState, result: BackendResult) -> None:
+        """Numerical trouble (``d = 0`` is feasible: the start meets the hard constraints): retry a smaller
+        subproblem, and end the run after more than ``max_backend_failures`` in a row."""
+        state.failures += 1
+        state.radius = self.trust_region.after_failure(state.radius)
+        self.record(state, 0.0, float("nan"), False, result)
+        if state.failures > self.settings.max_backend_failures:
+            broken = not_finite(state.raw)
+            why = (f"; the linearization at the iterate is not a number in {broken}: a derivative undefined there (a "
+                   "norm or a root at zero?)") if broken else ""
+            state.finish("solver_error", f"backend {self.solver_label} returned {result.status} {state.failures} "
+                                         f"times in a row{why}")
+
     def _penalty_too_low(self, state: IterationState, step: float, linearized: float, accepted: bool,
                          ev_new: Evaluation, hessian: np.ndarray | None) -> bool:
-        """Whether the step shows the weight below the multipliers (:meth:`PenaltyPolicy.steered
-        <convexguid.scp.policies.PenaltyPolicy.steered>`), away from feasibility (above :data:`NEARLY_FEASIBLE`
-        tolerances) and outside phase 1."""
+        """Whether the step shows the weight below the multipliers, away from feasibility (above :data:`NEARLY_FEASIBLE`
+        tolerances) and outside phase 1 (:meth:`~convexguid.scp.policies.PenaltyPolicy.steered`)."""
         if self.phase1 or max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance:
             state.kept = 0
             return False
@@ -341,9 +327,8 @@ class SCPAlgorithm:
         program_k = self.assembler.build(state.x, state.raw, self.box(state), ceiling, hessian)
         self.feasibility_backend, result, _ = self.solved(state, program_k, self.feasibility_backend,
                                                            self.choice.backend, like=self.backend)
-        if not result.usable:
-            return penalty_sum(state.ev)
-        return linearized_violation(state.raw, self.outputs, self.assembler.step(result.x))
+        return (linearized_violation(state.raw, self.outputs, self.assembler.step(result.x)) if result.usable
+                else penalty_sum(state.ev))
 
     def _raise_penalty(self, state: IterationState) -> bool:
         """Raise the penalty weight by its factor (False at its maximum); the merit and the radius follow."""
@@ -355,25 +340,26 @@ class SCPAlgorithm:
         state.radius = self.trust_region.after_penalty_change(state.radius)
         return True
 
-    def judged(self, state: IterationState, ratio: float, x_new: np.ndarray, ev_new: Evaluation,
-               predicted_objective: float, linearized: float) -> tuple[bool, float, Funnel | None]:
+    def judged(self, state: IterationState, trial: Trial, predicted_objective: float,
+               linearized: float) -> tuple[bool, float, Funnel | None]:
         """``(accepted, ratio, funnel)`` of a trial point: the merit's ratio test, or else the funnel, whose
         ratio then updates the radius (:class:`~convexguid.scp.policies.FunnelPolicy`); ``linearized`` is the
         violation the step's linearization predicted, ``predicted_objective`` the objective's predicted decrease."""
-        accepted = ratio >= self.settings.accept_ratio
+        accepted = trial.ratio >= self.settings.accept_ratio
         if state.funnel is None or self.phase1:
-            return accepted, ratio, state.funnel
+            return accepted, trial.ratio, state.funnel
         violation = penalty_sum(state.ev)
-        return self.funnel.decide(state.funnel, accepted, ratio, violation, penalty_sum(ev_new), state.objective,
-                                  state.objective - self.objective(ev_new, x_new), predicted_objective,
-                                  violation - linearized)
+        return self.funnel.decide(state.funnel, accepted, trial.ratio, violation, penalty_sum(trial.ev),
+                                  state.objective, state.objective - self.objective(trial.ev, trial.x),
+                                  predicted_objective, violation - linearized)
 
-    def _curvature_values(self, state: IterationState) -> np.ndarray:
-        """The program's convex curvature model at the iterate, weighted by the state's multipliers."""
+    def _curvature_values(self, state: IterationState) -> np.ndarray | None:
+        """The program's convex curvature model at the iterate, weighted by the state's multipliers (if both)."""
         m = state.multipliers
+        if self.curvature is None or m is None:
+            return None
         t = time.perf_counter()
-        omega = m.residual_weights(state.raw.residuals, self.weights, self.outputs)
-        values = self.curvature.values(state.x, CurvatureWeights(omega, m.inequality, m.equality))
+        values = self.curvature.values(state.x, m.curvature_weights(state.raw.residuals, self.weights, self.outputs))
         state.convexify_time_s += time.perf_counter() - t
         return values
 
@@ -385,8 +371,7 @@ class SCPAlgorithm:
             return
         target = self.penalty.relaxed(state.penalty, state.multipliers.largest(), self.objective_size)
         if target is not None:
-            state.penalty = target
-            state.merit = self.merit(state.ev, state.x, target)
+            state.penalty, state.merit = target, self.merit(state.ev, state.x, target)
 
     def _small(self, state: IterationState, step: float, predicted: float) -> bool:
         """The step, or the decrease the model predicted for it, is below the tolerance (or the radius collapsed)."""
@@ -395,18 +380,20 @@ class SCPAlgorithm:
         small_decrease = 0 <= predicted <= self.settings.tolerance * unit
         return step <= self.settings.tolerance or small_decrease or self.trust_region.collapsed(state.radius)
 
-    def trial(self, state: IterationState, u: np.ndarray) -> tuple[np.ndarray, Evaluation, Evaluation]:
-        """``(x, ev, raw)`` at the iterate moved by the scaled step ``u`` (no Jacobians)."""
-        x_new = state.x + u * self.scale
-        raw_new, ev_new = self._evaluate(state, x_new, jacobians=False)
-        return x_new, ev_new, raw_new
+    def trial(self, state: IterationState, x: np.ndarray, rho: float, merit: float, predicted: float) -> Trial:
+        """The trial point ``x`` evaluated (no Jacobians), its merit with weight ``rho`` and the ratio of its actual
+        decrease from ``merit`` to the ``predicted`` one."""
+        raw, ev = self._evaluate(state, x, jacobians=False)
+        merit_x = self.merit(ev, x, rho)
+        return Trial(x, raw, ev, merit_x, decrease_ratio(merit - merit_x, predicted))
 
-    def move_to(self, state: IterationState, x: np.ndarray, penalty: float) -> None:
-        """Make ``x`` the iterate: its evaluation with Jacobians, objective and merit (with weight ``penalty``)."""
+    def move_to(self, state: IterationState, x: np.ndarray, penalty: float, merit: float | None = None) -> None:
+        """Make ``x`` the iterate: its evaluation with Jacobians, objective and merit (with weight ``penalty``, unless
+        its trial point's ``merit`` is given)."""
         state.x, state.penalty = x, penalty
         state.raw, state.ev = self._evaluate(state, x, jacobians=True)
         state.objective = self.objective(state.ev, x)
-        state.merit = self.merit(state.ev, x, penalty)
+        state.merit = self.merit(state.ev, x, penalty) if merit is None else merit
 
     def _take_newton(self, state: IterationState, newton: Candidate, result: BackendResult) -> None:
         """Move to Newton's trial point (its penalty weight and working-set multipliers come along)."""
@@ -414,9 +401,7 @@ class SCPAlgorithm:
             # a whole well-predicted step frees Newton's radius, a cut one doubles it (Nocedal & Wright, Alg. 4.1)
             state.newton_radius = np.inf if newton.whole else 2.0 * state.newton_radius
         self.move_to(state, newton.x, newton.penalty)
-        state.funnel = newton.funnel
-        state.multipliers = newton.model.working.multipliers(newton.newton.multipliers, state.multipliers)
-        state.augmented = False
+        state.funnel, state.multipliers, state.augmented = newton.funnel, newton.multipliers, False
         measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
         if not newton.whole and newton.ratio >= self.trust_region.expand:
@@ -430,55 +415,47 @@ class SCPAlgorithm:
             self._stalled(state)
 
     def _stalled(self, state: IterationState) -> None:
-        """The iterates stopped moving: converged if feasible and a KKT point, else raise the penalty or certify. A
-        small step is no proof of optimality: a feasible stall short of the KKT tolerance polishes on, and ends
-        ``unverified`` after :data:`POLISH_ITERATIONS` more stalls."""
+        """The iterates stopped moving: converged at a feasible KKT point (a small step is no proof of it: a feasible
+        stall short of the KKT tolerance polishes on), else raise the penalty, restore feasibility or certify."""
         s = self.settings
         if max_violation(state.ev) <= s.feasibility_tolerance:
             why = ("trust region collapsed: no decrease found near a feasible point"
                    if self.trust_region.collapsed(state.radius) else "step and predicted decrease below tolerance")
             if state.kkt is None:
                 measure_kkt(self, state)
-            if state.kkt is not None and not kkt_met(self, state):
-                if certified_by_least_squares(self, state):
-                    return
-                if self.second_order is not None and state.polish < POLISH_ITERATIONS:
-                    # a small step is not yet proof of optimality: polish on (the curved subproblem); a trust
-                    # region that collapsed on ratios of round-off-sized decreases opens again
-                    state.polish += 1
-                    if self.trust_region.collapsed(state.radius):
-                        state.radius = self.trust_region.initial
-                    return
+            if state.kkt is None and not self.phase1:
+                state.finish("unverified", f"{why}; not proved optimal: the backend reported no multipliers")
+            elif state.kkt is None or kkt_met(self, state):
+                finish_optimal(self, state)
+            elif certified_by_least_squares(self, state):
+                pass  # finished: the least-squares multipliers make it a KKT point
+            elif self.second_order is not None and state.polish < POLISH_ITERATIONS:
+                # a small step is not yet proof of optimality: polish on (the curved subproblem); a trust
+                # region that collapsed on ratios of round-off-sized decreases opens again
+                state.polish += 1
+                if self.trust_region.collapsed(state.radius):
+                    state.radius = self.trust_region.initial
+            else:
                 state.finish("unverified", f"{why}; not proved optimal: KKT residuals above tolerance "
                                            f"{s.kkt_tolerance:g} (stationarity {state.kkt.relative_stationarity:.2g}, "
                                            f"complementarity {state.kkt.relative_complementarity:.2g} relative)")
-                return
-            if state.kkt is None and not self.phase1:
-                state.finish("unverified", f"{why}; not proved optimal: the backend reported no multipliers")
-                return
-            finish_optimal(self, state)
             return
         if self.phase1:
             # a stationary point of the violation certifies infeasibility only if it is a minimum of the violation
             saddle = off_saddle(self, state, penalty_sum(state.ev), "a saddle of the violation")
-            if saddle == "stepped":
-                return
             stall = "the elastic phase-1 problem stalls with the constraints still violated: " + describe_violations(
                 state.ev)
-            if saddle:
+            if saddle == "saddle":
                 state.finish("unverified", f"{stall}; no certificate of infeasibility, the point is not proved a "
                                            f"minimum of the violation: {state.escape_log[-1]}")
-            else:
+            elif not saddle:  # not "stepped" off it
                 state.finish("infeasible", stall)
             return
-        # just above the tolerance the subproblem's round-off may be the cause: restore feasibility once first
-        nearly_feasible = max_violation(state.ev) <= NEARLY_FEASIBLE * self.settings.feasibility_tolerance
-        first_try = nearly_feasible and state.phase1_runs == 0
-        if not first_try and self._raise_penalty(state):
-            # an infeasible stationary point of the penalty function: the penalty is below the multipliers
-            return
-        # at the largest penalty, or stalled by round-off just above the tolerance: restore feasibility directly
-        run_phase1(self, state)
+        # an infeasible stationary point of the penalty function: the penalty is below the multipliers; at the largest
+        # penalty, or stalled by round-off just above the tolerance (a first try), restore feasibility directly
+        first_try = max_violation(state.ev) <= NEARLY_FEASIBLE * s.feasibility_tolerance and state.phase1_runs == 0
+        if first_try or not self._raise_penalty(state):
+            run_phase1(self, state)
 
     def _check_limit(self, state: IterationState) -> IterationState:
         if not state.finished and state.iteration >= self.settings.max_iterations:
@@ -489,13 +466,13 @@ class SCPAlgorithm:
         return state
 
     def result(self, state: IterationState) -> SCPResult:
+        s = self.settings
         return SCPResult(x=state.x, status=state.status or "max_iterations", objective=state.objective,
                          max_violation=max_violation(state.ev), violations=violation_by_block(state.ev),
                          iterations=state.iteration, history=state.history, message=state.message,
                          wall_time_s=time.perf_counter() - state.started, convexify_time_s=state.convexify_time_s,
                          solver_time_s=state.solver_time_s, solver=self.solver_label,
-                         kkt=None if state.kkt is None else state.kkt.summary(self.settings.kkt_tolerance,
-                                                                              self.settings.feasibility_tolerance),
+                         kkt=None if state.kkt is None else state.kkt.summary(s.kkt_tolerance, s.feasibility_tolerance),
                          notes=tuple(state.escape_log), penalty=state.penalty)
 
     def run(self, x0: np.ndarray | None = None, penalty: float | None = None,

@@ -1,6 +1,5 @@
-"""The program's evaluations as the engine asks for them: a trial point's maps are not computed twice.
-
-Each iteration evaluates its trial points without Jacobians, then the one it accepts with them; a program that offers
+"""The program's evaluations as the engine asks for them: a trial point's maps are not computed twice. Each iteration
+evaluates its trial points without Jacobians, then the one it accepts with them; a program that offers
 ``with_jacobians(x, values)`` (:class:`~convexguid.scp.problem.NonconvexProgram`) then only adds the Jacobians.
 """
 

@@ -1,6 +1,5 @@
-"""The Lagrangian of the nonlinear program: its multipliers, its gradient, and the working set they define.
-
-With the multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem (:class:`Multipliers`) its Hessian is
+"""The Lagrangian of the nonlinear program: its multipliers, its gradient, and the working set they define. With the
+multipliers :math:`(\\omega, \\mu, \\lambda)` of the last subproblem (:class:`Multipliers`) its Hessian is
 
 .. math::
 
@@ -19,7 +18,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 import scipy.sparse as sp
 
-from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints
+from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, per_block, stacked_values
 
 MAX_DENSE_SIZE = 3000
 """Programs with more variables keep the first-order model (the end game works on dense matrices)."""
@@ -55,9 +54,11 @@ class Multipliers:
         everything = np.concatenate([self.linear_inequality, self.output, self.inequality, self.equality, [0.0]])
         return 1e-6 * max(float(np.max(np.abs(everything))), 1e-300)
 
-    def residual_weights(self, residuals: np.ndarray, weights: np.ndarray, outputs: OutputConstraints) -> np.ndarray:
-        """:math:`\\omega = 2 W r + M^T \\nu`: the weight of each residual's curvature in the Lagrangian."""
-        return 2.0 * weights * residuals + (outputs.transposed @ self.output if self.output.size else 0.0)
+    def curvature_weights(self, residuals: np.ndarray, weights: np.ndarray,
+                          outputs: OutputConstraints) -> CurvatureWeights:
+        """The Lagrangian's weights on each map's curvature: :math:`\\omega = 2 W r + M^T \\nu` on the residuals'."""
+        omega = 2.0 * weights * residuals + (outputs.transposed @ self.output if self.output.size else 0.0)
+        return CurvatureWeights(omega, self.inequality, self.equality)
 
 
 @dataclass(frozen=True)
@@ -81,18 +82,13 @@ def lagrangian_gradient(ev: Evaluation, weights: CurvatureWeights) -> np.ndarray
     """:math:`J_r^T \\omega + J_g^T \\mu + J_e^T \\lambda` from an evaluation with Jacobians."""
     total = _transpose_times(ev.residual_jacobian, weights.residual)
     for blocks, values in ((ev.inequalities, weights.inequality), (ev.equalities, weights.equality)):
-        start = 0
-        for block in blocks:
-            size = block.values.size
-            total = total + _transpose_times(block.jacobian, values[start: start + size])
-            start += size
+        for block, part in per_block(blocks, values):
+            total = total + _transpose_times(block.jacobian, part)
     return np.asarray(total, dtype=float).ravel()
 
 
 def _transpose_times(jacobian, y: np.ndarray):
-    if jacobian is None or y.size == 0:
-        return 0.0
-    return jacobian.T @ y
+    return 0.0 if jacobian is None or y.size == 0 else jacobian.T @ y
 
 
 def has_jacobian(ev: Evaluation) -> bool:
@@ -124,60 +120,43 @@ class WorkingSet:
     @classmethod
     def at(cls, ev: Evaluation, multipliers: Multipliers, linear: LinearConstraints, outputs: OutputConstraints,
            x: np.ndarray, tolerance: float, penalty: float) -> WorkingSet:
-        significant = multipliers.significant()
-        gap = linear.G @ x - linear.h if linear.G.shape[0] else np.zeros(0)
-        out = outputs.M @ ev.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
-        values = _values_of(ev.inequalities)
-        elastic = 0.999 * penalty
-        return cls((multipliers.linear_inequality > significant) | (gap >= -tolerance * (1 + np.abs(linear.h))),
-                   ((multipliers.output > significant) | (out >= -tolerance)) & (multipliers.output < elastic),
-                   ((multipliers.inequality > significant) | (values >= -tolerance))
+        significant, elastic = multipliers.significant(), 0.999 * penalty
+        near_bound = linear.gap(x) >= -tolerance * (1 + np.abs(linear.h))
+        return cls((multipliers.linear_inequality > significant) | near_bound,
+                   ((multipliers.output > significant) | (outputs.gap(ev.residuals) >= -tolerance))
+                   & (multipliers.output < elastic),
+                   ((multipliers.inequality > significant) | (stacked_values(ev.inequalities) >= -tolerance))
                    & (multipliers.inequality < elastic),
                    np.abs(multipliers.equality) < elastic)
 
     def values(self, ev: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                x: np.ndarray) -> np.ndarray:
         """The working rows' values at ``x`` (``ev``: the program's evaluation there): zero on their bounds."""
-        parts = [linear.A @ x - linear.b if linear.A.shape[0] else np.zeros(0)]
-        parts.append((linear.G @ x - linear.h)[self.linear_inequality] if linear.G.shape[0] else np.zeros(0))
-        parts.append((outputs.M @ ev.residuals - outputs.m)[self.output] if outputs.M.shape[0] else np.zeros(0))
-        parts.append(_values_of(ev.inequalities)[self.inequality])
-        parts.append(_values_of(ev.equalities)[self.equality])
-        return np.concatenate(parts)
+        return np.concatenate([linear.A @ x - linear.b if linear.A.shape[0] else np.zeros(0),
+                               linear.gap(x)[self.linear_inequality], outputs.gap(ev.residuals)[self.output],
+                               stacked_values(ev.inequalities)[self.inequality],
+                               stacked_values(ev.equalities)[self.equality]])
 
     def rows(self, ev: Evaluation, linear: LinearConstraints, outputs: OutputConstraints) -> np.ndarray:
-        """The working rows' Jacobian at the point ``ev`` was evaluated (with Jacobians), dense (the end game's
-        programs are small: :data:`MAX_DENSE_SIZE`)."""
+        """The working rows' dense Jacobian at ``ev`` 's point (end-game programs are small: :data:`MAX_DENSE_SIZE`)."""
         parts = [_dense_rows(linear.A, None), _dense_rows(linear.G, self.linear_inequality)]
         if outputs.M.shape[0]:
             parts.append(_dense_rows(outputs.M @ ev.residual_jacobian, self.output))
         for blocks, mask in ((ev.inequalities, self.inequality), (ev.equalities, self.equality)):
-            start = 0
-            for block in blocks:
-                size = block.values.size
-                parts.append(_dense_rows(block.jacobian, mask[start: start + size]))
-                start += size
+            parts += [_dense_rows(block.jacobian, part) for block, part in per_block(blocks, mask)]
         return np.vstack(parts)
 
-    def multipliers(self, y: np.ndarray, like: Multipliers) -> Multipliers:
-        """Working-set multipliers ``y`` (in row order) spread back over every constraint (zero off the set)."""
-        sizes = [like.linear_equality.size, int(self.linear_inequality.sum()), int(self.output.sum()),
-                 int(self.inequality.sum()), int(self.equality.sum())]
-        ends = np.cumsum(sizes)
-        a, g, o, i, e = (y[end - size: end] for end, size in zip(ends, sizes, strict=True))
-
-        def spread(mask: np.ndarray, values: np.ndarray) -> np.ndarray:
-            out = np.zeros(mask.size)
-            out[mask] = values
-            return out
-
-        return Multipliers(equality=spread(self.equality, e), inequality=spread(self.inequality, i),
-                           output=spread(self.output, o),
-                           linear_equality=a.copy(), linear_inequality=spread(self.linear_inequality, g))
-
-
-def _values_of(blocks) -> np.ndarray:
-    return np.concatenate([b.values for b in blocks]) if blocks else np.zeros(0)
+    def multipliers(self, y: np.ndarray, linear_equalities: int) -> Multipliers:
+        """The working rows' multipliers ``y`` (``A x = b`` 's first) spread over every constraint, zero off the set."""
+        start, spread = linear_equalities, []
+        for mask in (self.linear_inequality, self.output, self.inequality, self.equality):
+            values = np.zeros(mask.size)
+            values[mask] = y[start: start + int(mask.sum())]
+            spread.append(values)
+            start += int(mask.sum())
+        g, o, i, e = spread
+        return Multipliers(equality=e, inequality=i, output=o, linear_equality=y[:linear_equalities].copy(),
+                           linear_inequality=g)
 
 
 def _dense_rows(matrix, mask: np.ndarray | None) -> np.ndarray:

@@ -1,16 +1,11 @@
-"""The measures the SCP engine judges an iterate by: the objective, the violation of each constraint block, and
-the exact-penalty merit's ingredients (:mod:`convexguid.scp.engine`)."""
+"""The measures the SCP engine judges an iterate by besides its objective: the violation of each constraint block,
+and the exact-penalty merit's ingredients (:mod:`convexguid.scp.engine`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from convexguid.scp.problem import Evaluation
-
-
-def objective_value(ev: Evaluation, weights: np.ndarray, cost: np.ndarray, x: np.ndarray) -> float:
-    """:math:`f(x) = \\sum_i w_i r_i^2 + c^T x`."""
-    return float(weights @ ev.residuals**2 + cost @ x)
 
 
 def violation_by_block(ev: Evaluation) -> dict[str, float]:
@@ -25,8 +20,7 @@ def max_violation(ev: Evaluation) -> float:
 
 
 def describe_violations(ev: Evaluation) -> str:
-    """``"name by value unit; ..."`` for every violated block (with its worst row where the block labels its rows),
-    or ``"none"``."""
+    """``"name by value unit; ..."`` for each violated block (its worst row named if it labels them), or ``"none"``."""
     blocks = {b.name: b for b in (*ev.inequalities, *ev.equalities)}
     parts = []
     for name, worst in violation_by_block(ev).items():

@@ -1,14 +1,30 @@
-"""Is the iterate a minimum? The KKT residuals, the certificate a subproblem gives its own iterate, and the check
-that a KKT point is no saddle (with the step off one that is).
+"""Is the iterate a minimum? The KKT residuals, the certificate a subproblem gives its own iterate, and the check that a
+KKT point is no saddle (with the step off one that is). A small step proves nothing (a collapsed trust region also takes
+small steps): a run ends ``converged`` only through :func:`finish_optimal`, at an iterate whose KKT residuals hold with
+the multipliers of a subproblem or of a least-squares estimate and whose reduced Hessian has no negative curvature worth
+following. The residuals, in the problem's own units, are those of the Karush-Kuhn-Tucker conditions of
 
-A small step proves nothing (a collapsed trust region also takes small steps): a run ends ``converged`` only through
-:func:`finish_optimal`, at an iterate whose KKT residuals (:mod:`convexguid.scp.kkt`) hold with the multipliers of a
-subproblem or of a least-squares estimate and whose reduced Hessian has no negative curvature worth following.
+.. math::
+
+    \\min_x f(x) = r^T W r + c^T x \\quad\\text{s.t.}\\quad Ax = b,\\; Gx \\le h,\\; M r(x) \\le m,\\;
+    g(x) \\le 0,\\; e(x) = 0,\\; F_i x + f_i \\in \\mathcal Q_i
+
+at the iterate (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Thm. 12.1, eqs. 12.34):
+
+* stationarity: :math:`\\nabla f + A^T\\lambda_A + G^T\\mu_G + J_r^T M^T \\nu + J_g^T \\mu + J_e^T \\lambda
+  - \\sum_i F_i^T y_i = 0` (:math:`y_i \\in \\mathcal Q_i`, the cones' duals), each component times its variable's
+  scale :math:`\\sigma_i`, in the objective's units;
+* feasibility: the worst violation of any constraint, in that constraint's own unit;
+* complementarity: :math:`\\max_j |\\mu_j g_j(x)|` over every inequality and :math:`|y_i^T (F_i x + f_i)|` over
+  every cone, in the objective's units.
+
+Stationarity and complementarity are judged relative to :math:`\\max(|f(x)|, 10^{-3} s_f)`, :math:`s_f` the
+objective's size at the start (:math:`|f(x_0)|`, or :math:`|c|^T \\sigma` if larger), and absolutely when both are 0.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -16,9 +32,9 @@ import scipy.sparse as sp
 
 from convexguid.backends.base import BackendResult, Cones, ConicProgram
 from convexguid.backends.registry import make_backend
-from convexguid.scp.kkt import kkt_residuals
-from convexguid.scp.lagrangian import Multipliers, WorkingSet, objective_gradient
+from convexguid.scp.lagrangian import Multipliers, WorkingSet, lagrangian_gradient, objective_gradient
 from convexguid.scp.merit import max_violation
+from convexguid.scp.problem import Evaluation, per_block, stacked_values
 
 if TYPE_CHECKING:
     from convexguid.scp.endgame import LocalModel
@@ -29,14 +45,69 @@ MAX_ESCAPES = 2
 """Steps off a saddle (a stationary point with negative curvature) one run may take."""
 
 
+@dataclass(frozen=True)
+class KKTResiduals:
+    """KKT residuals at one iterate (absolute, in their units) and the objective unit they are judged against."""
+
+    stationarity: float
+    feasibility: float
+    complementarity: float
+    objective_unit: float
+
+    @property
+    def relative_stationarity(self) -> float:
+        return self.stationarity / self.objective_unit
+
+    @property
+    def relative_complementarity(self) -> float:
+        return self.complementarity / self.objective_unit
+
+    def met(self, tolerance: float, feasibility_tolerance: float) -> bool:
+        """Stationarity and complementarity within ``tolerance`` (relative), feasibility within its own."""
+        return (self.relative_stationarity <= tolerance and self.relative_complementarity <= tolerance
+                and self.feasibility <= feasibility_tolerance)
+
+    def summary(self, tolerance: float, feasibility_tolerance: float) -> dict:
+        """The ``kkt`` object of a solution's summary."""
+        return {"stationarity": self.stationarity, "stationarity_relative": self.relative_stationarity,
+                "feasibility": self.feasibility, "complementarity": self.complementarity,
+                "complementarity_relative": self.relative_complementarity, "objective_unit": self.objective_unit,
+                "tolerance": tolerance, "feasibility_tolerance": feasibility_tolerance,
+                "met": self.met(tolerance, feasibility_tolerance)}
+
+
 def measure_kkt(algo: SCPAlgorithm, state: IterationState) -> None:
-    """KKT residuals at the iterate with the state's multipliers (none yet, or phase 1: left unmeasured)."""
+    """The KKT residuals at the iterate with the state's multipliers (none yet, or phase 1: left unmeasured)."""
     if state.multipliers is None or algo.phase1:
         return
-    state.kkt = kkt_residuals(state.x, state.raw, state.multipliers, weights=algo.weights, cost=algo.cost,
-                              linear=algo.linear, outputs=algo.outputs, scale=algo.scale,
-                              objective=state.objective, objective_size=algo.objective_size,
-                              feasibility=max_violation(state.ev))
+    x, raw, multipliers, linear, outputs = state.x, state.raw, state.multipliers, algo.linear, algo.outputs
+    gradient = algo.cost + lagrangian_gradient(raw, multipliers.curvature_weights(raw.residuals, algo.weights, outputs))
+    A, G = linear.A, linear.G  # dense or sparse, as the program gives them
+    if A.shape[0]:
+        gradient = gradient + A.T @ multipliers.linear_equality
+    if G.shape[0]:
+        gradient = gradient + G.T @ multipliers.linear_inequality
+    for block, duals in _cone_duals(raw, multipliers):
+        gradient = gradient - block.jacobian.T @ duals  # the cone v(x) in Q: -F^T y, y in Q
+    stationarity = float(np.max(np.abs(gradient * algo.scale), initial=0.0))
+    products = [multipliers.linear_inequality * linear.gap(x), multipliers.output * outputs.gap(raw.residuals)]
+    products += [mu * block.values for block, mu in per_block(raw.inequalities, multipliers.inequality)]
+    for block, duals in _cone_duals(raw, multipliers):
+        ends = np.cumsum(block.sizes)
+        products.append(np.array([duals[end - size: end] @ block.values[end - size: end]
+                                  for end, size in zip(ends, block.sizes, strict=True)]))
+    complementarity = float(np.max(np.abs(np.concatenate(products)), initial=0.0))
+    unit = max(abs(state.objective), 1e-3 * algo.objective_size)
+    # an objective without a size (a boundary-value problem stated with a zero cost) makes them absolute: relative to
+    # 1e-12, a round-off of 9e-16 was a stationarity of 9e-4 and the run never ended
+    unit = max(unit, 1e-12) if unit > 0 else 1.0
+    state.kkt = KKTResiduals(stationarity, max_violation(state.ev), complementarity, unit)
+
+
+def _cone_duals(raw: Evaluation, multipliers: Multipliers):
+    """Each cone block with its rows' duals (zero from a step that saw no cone active: the end game's)."""
+    rows = sum(block.values.size for block in raw.cones)
+    return per_block(raw.cones, multipliers.cone if multipliers.cone.size == rows else np.zeros(rows))
 
 
 def kkt_met(algo: SCPAlgorithm, state: IterationState) -> bool:
@@ -62,9 +133,8 @@ def finish_optimal(algo: SCPAlgorithm, state: IterationState) -> None:
     """A KKT point: converged ("KKT conditions met", then any steps off saddles), unless the reduced Hessian has
     negative curvature worth following (then :func:`off_saddle` steps off it)."""
     unit = state.kkt.objective_unit if state.kkt is not None else max(abs(state.objective), 1e-12)
-    if not algo.phase1 and off_saddle(algo, state, unit, "a saddle") == "stepped":
-        return
-    state.finish("converged", "; ".join(["KKT conditions met", *state.escape_log]))
+    if algo.phase1 or off_saddle(algo, state, unit, "a saddle") != "stepped":
+        state.finish("converged", "; ".join(["KKT conditions met", *state.escape_log]))
 
 
 def off_saddle(algo: SCPAlgorithm, state: IterationState, unit: float, what: str) -> str:
@@ -78,9 +148,7 @@ def off_saddle(algo: SCPAlgorithm, state: IterationState, unit: float, what: str
     if (models is None or state.escapes >= MAX_ESCAPES or state.multipliers is None
             or state.multipliers.cone_active()):
         return ""
-    working = models.working_set(state.x, state.raw, state.multipliers, algo.settings.feasibility_tolerance,
-                                 state.penalty)
-    model = models.at(state.x, state.raw, state.multipliers, working)
+    model = models.at(state, models.working_set(state))
     newton = model.newton()
     gain = 0.5 * max(-newton.smallest_eigenvalue, 0.0) * algo.trust_region.initial**2
     if not (newton.shift and gain > algo.settings.kkt_tolerance * unit):
@@ -103,23 +171,22 @@ def escape_saddle(algo: SCPAlgorithm, state: IterationState, model: LocalModel, 
                   curvature: float, unit: float) -> bool:
     """Step off a saddle along its direction of negative curvature (scaled ``direction``, reduced-Hessian eigenvalue
     ``curvature``) and go on; False (and no step) where the merit function drops neither way. Each trial point, brought
-    back onto the working set to first order (:meth:`~convexguid.scp.endgame.LocalModel.correction`), is tried both
-    ways from the initial trust radius :math:`r` down, halved while the promised decrease
-    :math:`\\tfrac12 |\\lambda| r^2` is above the KKT tolerance of the objective (``unit``); the run goes on from the
-    first point whose merit is lower by :data:`ESCAPE_SHARE` of that promise (docs/engine.md, 'KKT certificates and
-    the polish')."""
+    back onto the working set to first order (:meth:`~convexguid.scp.endgame.LocalModel.correction`), is tried both ways
+    from the initial trust radius :math:`r` down, halved while the promised decrease :math:`\\tfrac12 |\\lambda| r^2` is
+    above the KKT tolerance of the objective (``unit``); the run goes on from the first point whose merit is lower by
+    :data:`ESCAPE_SHARE` of that promise (docs/engine.md, 'KKT certificates and the polish')."""
     models = algo.second_order
     radius = algo.trust_region.initial
     while (promised := 0.5 * -curvature * radius**2) > algo.settings.kkt_tolerance * unit:
         for sign in (1.0, -1.0):
             u = sign * radius * direction
-            x_try, _, raw_try = algo.trial(state, u)
+            tried = algo.trial(state, state.x + u * algo.scale, state.penalty, state.merit, promised)
             u = models.onto_equalities(state.x, u + model.correction(
-                model.working.values(raw_try, models.linear, algo.outputs, x_try)))
-            x_try, ev_try, _ = algo.trial(state, u)
-            if algo.merit(ev_try, x_try, state.penalty) < state.merit - ESCAPE_SHARE * promised:
+                model.working.values(tried.raw, models.linear, algo.outputs, tried.x)))
+            tried = algo.trial(state, state.x + u * algo.scale, state.penalty, state.merit, promised)
+            if tried.merit < state.merit - ESCAPE_SHARE * promised:
                 state.escapes += 1
-                algo.move_to(state, x_try, state.penalty)
+                algo.move_to(state, tried.x, state.penalty)
                 state.radius = algo.trust_region.initial
                 state.kkt = None
                 return True
@@ -139,12 +206,8 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     :math:`\\|v_{1:}\\| - v_0 \\le 0` there, whose multiplier :math:`\\mu` is the cone dual
     :math:`\\mu (1, -v_{1:}/\\|v_{1:}\\|)` (:func:`_cone_rows`). Where the active constraints are degenerate the
     subproblem's own multipliers can miss by far more (docs/engine.md, 'KKT certificates and the polish')."""
-    raw = state.raw
-    linear = algo.linear
-    outputs = algo.outputs
-    gap = linear.G @ state.x - linear.h if linear.G.shape[0] else np.zeros(0)
-    out = outputs.M @ raw.residuals - outputs.m if outputs.M.shape[0] else np.zeros(0)
-    values = np.concatenate([b.values for b in raw.inequalities]) if raw.inequalities else np.zeros(0)
+    raw, linear, outputs = state.raw, algo.linear, algo.outputs
+    gap, out, values = linear.gap(state.x), outputs.gap(raw.residuals), stacked_values(raw.inequalities)
     size = sum(b.values.size for b in raw.equalities)
     working = WorkingSet(gap >= -NEAR_ACTIVE, out >= -NEAR_ACTIVE, values >= -NEAR_ACTIVE, np.ones(size, dtype=bool))
     rows = working.rows(raw, linear, outputs)
@@ -160,8 +223,7 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
     y = bounded_least_squares(sp.csc_matrix(matrix), target, lower)
     if y is None:
         return None
-    shape = Multipliers(np.zeros(size), np.zeros(values.size), np.zeros(out.size), np.zeros(free), np.zeros(gap.size))
-    estimate = working.multipliers(y[: rows.shape[0]], shape)
+    estimate = working.multipliers(y[: rows.shape[0]], free)
     return replace(estimate, cone=cone_duals @ y[rows.shape[0]:]) if raw.cones else estimate
 
 
@@ -217,9 +279,7 @@ def _cone_rows(raw, n: int) -> tuple[sp.csr_matrix, np.ndarray]:
 
 def certified_by_least_squares(algo: SCPAlgorithm, state: IterationState) -> bool:
     """Whether the :func:`least_squares_multipliers` make the iterate a KKT point (then the run ends there)."""
-    if algo.phase1 or state.multipliers is None:
-        return False
-    estimate = least_squares_multipliers(algo, state)
+    estimate = None if algo.phase1 or state.multipliers is None else least_squares_multipliers(algo, state)
     if estimate is None:
         return False
     kept = state.multipliers, state.kkt

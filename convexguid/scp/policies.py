@@ -1,7 +1,6 @@
-"""The named rules of the SCP step: trust region, penalty weight, funnel, second-order correction.
-
-Each policy is a small object built from :class:`~convexguid.scp.problem.SCPSettings` that the engine asks one question
-at a time, so a rule can be read, tested and replaced on its own (what each is for, measured: docs/engine.md).
+"""The named rules of the SCP step: trust region, penalty weight, funnel, second-order correction. Each is a small
+object built from :class:`~convexguid.scp.problem.SCPSettings` that the engine asks one question at a time, so a rule
+can be read, tested and replaced on its own (what each is for, measured: docs/engine.md).
 """
 
 from __future__ import annotations
@@ -18,10 +17,6 @@ FRACTION_TO_BOUNDARY = 0.99
 BOUNDARY_REACH = 1e-6
 """Scaled distance to a guarded bound from which a step may reach the bound itself (an active bound is then met in
 a few iterations: the distance shrinks a hundredfold per step until it is this small)."""
-
-
-def _short_of(radius: float, room: np.ndarray) -> np.ndarray:
-    return np.where(room > BOUNDARY_REACH, np.minimum(radius, FRACTION_TO_BOUNDARY * room), radius)
 
 
 @dataclass(frozen=True)
@@ -49,7 +44,8 @@ class TrustRegionPolicy:
         if guarded is None:
             return radius
         lower, upper = guarded
-        return np.concatenate([_short_of(radius, (upper - x) / scale), _short_of(radius, (x - lower) / scale)])
+        room = np.concatenate([(upper - x) / scale, (x - lower) / scale])
+        return np.where(room > BOUNDARY_REACH, np.minimum(radius, FRACTION_TO_BOUNDARY * room), radius)
 
     def update(self, radius: float, ratio: float, step: float) -> float:
         if ratio < self.shrink:
@@ -89,8 +85,8 @@ class PenaltyPolicy:
     floor: float = 1e-3
     inactive: float = 1e-6
     retained: float = 0.5
-    """The share of the violation by which a step's linearization adds to it, or that an accepted step inside its
-    trust region keeps, that shows the weight too low (:meth:`steered`)."""
+    """The share of the violation a step's linearization adds, or an accepted step inside its trust region keeps,
+    that shows the weight too low (:meth:`steered`)."""
     persistence: int = 3
     """Accepted steps in a row inside the trust region that keep the violation before the weight is raised."""
     steering: float = 0.1
@@ -104,12 +100,10 @@ class PenaltyPolicy:
         return cls(s.penalty, s.penalty_max, s.penalty_unit)
 
     def scale(self, objective_size: float) -> float:
-        """The unit of the weights: 1, or the objective's size at the start (at least 1e-12); 1 also when that size
-        is zero (a zero cost, stated for a boundary-value problem: weights of 1e-11 let the violation be traded for
-        nothing, and the steps were refused with ratio -1 until the weight had climbed back)."""
-        if self.unit != "objective" or objective_size == 0.0:
-            return 1.0
-        return max(abs(objective_size), 1e-12)
+        """The unit of the weights: 1, or the objective's size at the start (at least 1e-12); 1 when that size is
+        zero (a boundary-value problem's zero cost: weights of 1e-11 traded the violation for nothing, and the steps
+        were refused with ratio -1 until the weight had climbed back)."""
+        return 1.0 if self.unit != "objective" or objective_size == 0.0 else max(abs(objective_size), 1e-12)
 
     def initial(self, objective_size: float) -> float:
         return self.start * self.scale(objective_size)
@@ -159,9 +153,7 @@ class PenaltyPolicy:
     def escalated(self, rho: float, objective_size: float) -> float | None:
         """The next weight, or ``None`` if ``rho`` is already at the maximum."""
         ceiling = self.maximum * self.scale(objective_size)
-        if rho >= ceiling * (1 - 1e-12):
-            return None
-        return min(self.factor * rho, ceiling)
+        return None if rho >= ceiling * (1 - 1e-12) else min(self.factor * rho, ceiling)
 
 
 @dataclass(frozen=True)
@@ -171,25 +163,17 @@ class Funnel:
     width: float
     left: tuple[tuple[float, float], ...] = ()
 
-    def returns_to(self, violation: float, objective: float, margin: float) -> bool:
-        """Whether ``(violation, objective)`` is no better in either measure than a point an h-step left (by
-        ``margin`` times that point's violation): a filter's test (Fletcher & Leyffer, Math. Program. 91, 2002)."""
-        return any(violation >= (1 - margin) * h and objective >= f - margin * h for h, f in self.left)
-
 
 @dataclass(frozen=True)
 class FunnelPolicy:
     """A second way to accept a step: a funnel on the violation, for the steps the exact-penalty merit refuses only
     for their constraints' curvature (Gould & Toint, "Nonlinear programming without a penalty function or a filter",
     Math. Program. 122, 2010). The violation :math:`h` (the merit's :math:`\\ell_1` sum) must stay below the width
-    :math:`\\tau`, at first :attr:`start_factor` times the start's violation (at least :attr:`start_floor`). A step
-    whose model predicts an objective decrease :math:`\\Delta q^{2.3} \\ge h^{1.1}` (IPOPT's switching condition:
-    Wachter & Biegler, Math. Program. 106, 2006, eq. 19) is an *f-step*: accepted when :math:`h^+ \\le \\tau` and the
-    objective drops by at least :attr:`sufficient` of :math:`\\Delta q`. Any other is an *h-step*: accepted when
-    :math:`h^+ \\le \\tau` and the violation drops by at least :attr:`sufficient` of its linearization's prediction;
-    the funnel then narrows to :math:`\\max(\\kappa \\tau, h^+ + \\tfrac12 (h - h^+))` (:math:`\\kappa` =
-    :attr:`narrowing`) and keeps the point left as a filter entry, which no later step may fail to beat in violation
-    or objective (by :attr:`filter_margin`). Why, measured: docs/engine.md, 'Funnel'."""
+    :math:`\\tau`. A step whose model predicts an objective decrease :math:`\\Delta q^{2.3} \\ge h^{1.1}` (IPOPT's
+    switching condition: Wachter & Biegler, Math. Program. 106, 2006, eq. 19) is an *f-step*, judged by the objective;
+    any other is an *h-step*, judged by the violation, after which the funnel narrows and keeps the point left as a
+    filter entry (Fletcher & Leyffer, Math. Program. 91, 2002) that no later step may fail to beat in violation or
+    objective (:meth:`judge`, :meth:`decide`). Why, measured: docs/engine.md, 'Funnel'."""
 
     start_factor: float = 10.0
     start_floor: float = 1.0
@@ -226,8 +210,10 @@ class FunnelPolicy:
         point it left). A refused step's ratio is at most 0 (the radius shrinks)."""
         kind, ratio = self.judge(funnel.width, violation, violation_new, objective_drop, predicted_objective,
                                  predicted_violation)
-        accepted = merit_accepts or kind is not None
-        if not accepted or funnel.returns_to(violation_new, objective - objective_drop, self.filter_margin):
+        # a filter's test: no better in either measure than a point an h-step left (by a margin of its violation)
+        objective_new, margin = objective - objective_drop, self.filter_margin
+        returns = any(violation_new >= (1 - margin) * h and objective_new >= f - margin * h for h, f in funnel.left)
+        if not (merit_accepts or kind is not None) or returns:
             return False, min(merit_ratio, 0.0), funnel
         if violation_new < violation:
             # a point left for less violation at a higher objective is not to be come back to, whatever accepted the
@@ -257,9 +243,8 @@ class SecondOrderCorrection:
         """Whether to correct a step from the point of ``ev`` whose trial point evaluated to ``trial``: not when a
         constraint there is not a number (the trial left the maps' domain; shifted by it, the subproblem would be
         too)."""
-        if not (self.enabled and ratio < self.threshold and (ev.equalities or ev.inequalities)):
-            return False
-        return all(np.all(np.isfinite(block.values)) for block in (*trial.equalities, *trial.inequalities))
+        wanted = self.enabled and ratio < self.threshold and bool(ev.equalities or ev.inequalities)
+        return wanted and all(np.all(np.isfinite(block.values)) for block in (*trial.equalities, *trial.inequalities))
 
     @staticmethod
     def shifted(at_x: Evaluation, at_trial: Evaluation, d: np.ndarray) -> Evaluation:

@@ -14,7 +14,7 @@ lifts :math:`y = r(x)` into the subproblem and bounds :math:`y`. A formulation i
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Protocol
@@ -62,6 +62,19 @@ class ConeBlock:
         return ConstraintBlock(self.name, self.violations(), None, self.unit)
 
 
+def stacked_values(blocks: tuple[ConstraintBlock | ConeBlock, ...]) -> np.ndarray:
+    """The blocks' values, one block after another."""
+    return np.concatenate([b.values for b in blocks]) if blocks else np.zeros(0)
+
+
+def per_block(blocks: tuple[ConstraintBlock | ConeBlock, ...], rows: np.ndarray) -> Iterator[tuple]:
+    """Each block with its part of ``rows``, an array over the blocks' rows one block after another."""
+    start = 0
+    for block in blocks:
+        yield block, rows[start: start + block.values.size]
+        start += block.values.size
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """Nonlinear maps of a :class:`NonconvexProgram` at one point (Jacobians optional)."""
@@ -89,7 +102,11 @@ class LinearConstraints:
     def sparse(self) -> LinearConstraints:
         """The same constraints with ``A`` and ``G`` as COO matrices of their nonzeros only (the assemblers fix their
         pattern from them: a dense block would put every explicit zero into the solver's KKT system)."""
-        return replace(self, A=_nonzeros(self.A), G=_nonzeros(self.G))
+        A, G = (sp.coo_matrix(matrix, dtype=float) for matrix in (self.A, self.G))
+        for matrix in (A, G):
+            matrix.sum_duplicates()
+            matrix.eliminate_zeros()
+        return replace(self, A=A, G=G)
 
     def onto_equalities(self, x: np.ndarray, scale: np.ndarray) -> np.ndarray:
         """The least change :math:`v` (scaled, least norm) with :math:`A (x + S v) = b`."""
@@ -98,12 +115,9 @@ class LinearConstraints:
         dense = self.A.toarray() if sp.issparse(self.A) else np.asarray(self.A, dtype=float)
         return np.linalg.lstsq(dense * scale, self.b - dense @ x, rcond=None)[0]
 
-
-def _nonzeros(matrix: np.ndarray | sp.spmatrix) -> sp.coo_matrix:
-    coo = sp.coo_matrix(matrix, dtype=float)
-    coo.sum_duplicates()
-    coo.eliminate_zeros()
-    return coo
+    def gap(self, x: np.ndarray) -> np.ndarray:
+        """``G x - h``: positive where ``x`` breaks a hard inequality."""
+        return self.G @ x - self.h if self.G.shape[0] else np.zeros(0)
 
 
 @dataclass(frozen=True)
@@ -133,9 +147,13 @@ class OutputConstraints:
         every iteration, and a transposed view made each time cost more than the product."""
         return sp.csr_matrix(self.M.T)
 
+    def gap(self, residuals: np.ndarray) -> np.ndarray:
+        """``M r - m``: positive where the residuals ``r`` break a bound."""
+        return self.M @ residuals - self.m if self.M.shape[0] else np.zeros(0)
+
     def blocks_at(self, residuals: np.ndarray) -> tuple[ConstraintBlock, ...]:
         """The constraint values ``M r - m`` split into named blocks (no Jacobians: they are linear in r)."""
-        values = self.M @ residuals - self.m
+        values = self.gap(residuals)
         return tuple(ConstraintBlock(b.name, values[b.rows], None, b.unit) for b in self.blocks)
 
 
@@ -175,20 +193,15 @@ class NonconvexProgram(Protocol):
     num_variables: int
 
     def initial_guess(self) -> np.ndarray: ...
+    def residual_weights(self) -> np.ndarray: ...
+    def linear_cost(self) -> np.ndarray: ...
+    def linear_constraints(self) -> LinearConstraints: ...
+    def output_constraints(self) -> OutputConstraints: ...
+    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation: ...
 
     def variable_scale(self) -> np.ndarray:
         """Typical magnitude of each variable; the trust region is a box in scaled units."""
         ...
-
-    def residual_weights(self) -> np.ndarray: ...
-
-    def linear_cost(self) -> np.ndarray: ...
-
-    def linear_constraints(self) -> LinearConstraints: ...
-
-    def output_constraints(self) -> OutputConstraints: ...
-
-    def evaluate(self, x: np.ndarray, jacobians: bool = True) -> Evaluation: ...
 
 
 @dataclass
@@ -200,7 +213,7 @@ class SCPSettings:
     numerical failures of the convex solver in a row are retried with a smaller trust region. ``iterative_refinement``
     refines the interior-point backend's KKT solves (Clarabel's default). ``second_order`` enables the end game
     (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance`` bounds the relative stationarity and complementarity at
-    convergence (:mod:`convexguid.scp.kkt`); ``funnel`` lets a funnel take steps the merit refuses
+    convergence (:mod:`convexguid.scp.optimality`); ``funnel`` lets a funnel take steps the merit refuses
     (:class:`~convexguid.scp.policies.FunnelPolicy`)."""
 
     backend: str = "auto"

@@ -1,10 +1,9 @@
-"""Start points the SCP can step from, and certificates when there are none.
-
-:func:`restore_start` moves a start that breaks the hard linear constraints ``A x = b, G x <= h`` (every subproblem
-keeps them) to the nearest point that meets them, or certifies that there is none. :func:`run_phase1` is the
-nonlinear counterpart: the same engine with the objective dropped minimises the :math:`\\ell_1` violation alone, and a
-stall with the violation positive is a local certificate of infeasibility (Nocedal & Wright, *Numerical
-Optimization*, 2nd ed., Sec. 17.2 and 18.5 on elastic modes; docs/engine.md, 'Restoration and phase 1').
+"""Start points the SCP can step from, and certificates when there are none. :func:`restore_start` moves a start that
+breaks the hard linear constraints ``A x = b, G x <= h`` (every subproblem keeps them) to the nearest point that meets
+them, or certifies that there is none. :func:`run_phase1` is the nonlinear counterpart: the same engine with the
+objective dropped minimises the :math:`\\ell_1` violation alone, and a stall with the violation positive is a local
+certificate of infeasibility (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec. 17.2 and 18.5 on elastic modes;
+docs/engine.md, 'Restoration and phase 1').
 """
 
 from __future__ import annotations
@@ -35,8 +34,6 @@ class Restoration:
     """A start point on the hard linear constraints, or the certificate that there is none."""
 
     x: np.ndarray | None
-    moved: float
-    """Largest scaled change of any variable (0 when the start already complied)."""
     certificate: str = ""
 
     @property
@@ -47,7 +44,7 @@ class Restoration:
 def linear_violation(lin: LinearConstraints, x: np.ndarray) -> float:
     """Worst violation of ``A x = b`` and ``G x <= h``, relative to ``1 + |rhs|``."""
     eq = np.abs(lin.A @ x - lin.b) / (1 + np.abs(lin.b)) if lin.A.shape[0] else np.zeros(0)
-    ineq = (lin.G @ x - lin.h) / (1 + np.abs(lin.h)) if lin.G.shape[0] else np.zeros(0)
+    ineq = lin.gap(x) / (1 + np.abs(lin.h))
     return float(max(np.max(eq, initial=0.0), np.max(ineq, initial=0.0)))
 
 
@@ -67,14 +64,14 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
     1e-11 was then reported as a certificate (the Delta III launch as PSOPT states it, which is feasible)."""
     lin = program.linear_constraints()
     if linear_violation(lin, x0) <= tolerance:
-        return Restoration(x0, 0.0)
+        return Restoration(x0)
     scale = program.variable_scale()
     n, n_a, n_g = x0.size, lin.A.shape[0], lin.G.shape[0]
     if n_g == 0 and n_a <= n:
         # equalities only: the nearest point is the least-norm solution of A S v = b - A x0, in closed form
-        v = lin.onto_equalities(x0, scale)
-        if linear_violation(lin, x0 + scale * v) <= tolerance:
-            return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
+        x = x0 + scale * lin.onto_equalities(x0, scale)
+        if linear_violation(lin, x) <= tolerance:
+            return Restoration(x)
     A = sp.csr_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))
     rhs = np.concatenate([lin.b - lin.A @ x0, lin.h - lin.G @ x0])
     norms = np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel())
@@ -83,15 +80,13 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
     projection = ConicProgram(sp.identity(n, format="csc"), np.zeros(n), A, rhs, Cones(zero=n_a, nonneg=n_g))
     result = make_backend(CERTIFYING_BACKEND, projection, 1e-10).solve()
     if result.usable:
-        v = result.x
-        return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
+        return Restoration(x0 + scale * result.x)
     least, v = _least_violation(A, rhs, n_a, n_g)
     if least <= INCONSISTENT:
-        return Restoration(x0 + scale * v, float(np.max(np.abs(v), initial=0.0)))
-    return Restoration(None, float("nan"),
-                       f"the hard linear constraints (boundary conditions, bounds) are inconsistent: the elastic "
-                       f"linear program's least total violation is {least:.3g} > {INCONSISTENT:g} (each row in "
-                       "units of its norm in the scaled variables)")
+        return Restoration(x0 + scale * v)
+    return Restoration(None, f"the hard linear constraints (boundary conditions, bounds) are inconsistent: the elastic "
+                       f"linear program's least total violation is {least:.3g} > {INCONSISTENT:g} (each row in units "
+                       "of its norm in the scaled variables)")
 
 
 def _least_violation(A: sp.csc_matrix, rhs: np.ndarray, n_a: int, n_g: int) -> tuple[float, np.ndarray | None]:

@@ -1,7 +1,6 @@
-"""What the SCP loop carries from one iteration to the next, and what it hands back.
-
-:class:`IterationState` is the whole state of :class:`~convexguid.scp.engine.SCPAlgorithm`: a step reads it and
-returns it updated, so a run can be inspected, logged or resumed between any two iterations.
+"""What the SCP loop carries from one iteration to the next, and what it hands back. :class:`IterationState` is the
+whole state of :class:`~convexguid.scp.engine.SCPAlgorithm`: a step reads it and returns it updated, so a run can be
+inspected, logged or resumed between any two iterations.
 """
 
 from __future__ import annotations
@@ -10,8 +9,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from convexguid.scp.kkt import KKTResiduals
 from convexguid.scp.lagrangian import Multipliers, WorkingSet
+from convexguid.scp.optimality import KKTResiduals
 from convexguid.scp.policies import Funnel
 from convexguid.scp.problem import Evaluation
 
@@ -99,7 +98,7 @@ class SCPResult:
     solver: str = ""
     """The backend that solved the subproblems, resolved (e.g. ``auto -> daqp (condensed)``)."""
     kkt: dict | None = None
-    """The KKT residuals at ``x`` (:meth:`~convexguid.scp.kkt.KKTResiduals.summary`), None if never measured."""
+    """The KKT residuals at ``x`` (:meth:`~convexguid.scp.optimality.KKTResiduals.summary`), None if never measured."""
     notes: tuple[str, ...] = ()
     """What the run did besides its iterations (e.g. a step off a saddle)."""
     penalty: float | None = None

@@ -279,9 +279,9 @@ class SolverSettings(SpecModel):
         Step and predicted-decrease tolerance of the SCP loop (scaled variables; decrease relative to the merit).
     kkt_tolerance : float
         Tolerance of the KKT residuals (stationarity and complementarity relative to the objective), the stop that
-        proves optimality (:mod:`convexguid.scp.kkt`).
+        proves optimality (:mod:`convexguid.scp.optimality`).
     second_order : bool
-        Newton's end game on the subproblems' working set (:mod:`convexguid.scp.newton`); ``false`` leaves the
+        Newton's end game on the subproblems' working set (:mod:`convexguid.scp.endgame`); ``false`` leaves the
         first-order SCP alone.
     trust_region : float
         Initial trust-region radius.
