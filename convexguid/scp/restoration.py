@@ -72,11 +72,9 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
         x = x0 + scale * lin.onto_equalities(x0, scale)
         if linear_violation(lin, x) <= tolerance:
             return Restoration(x)
-    A = sp.csr_matrix(sp.vstack([sp.csr_matrix(lin.A), sp.csr_matrix(lin.G)]) @ sp.diags(scale))
-    rhs = np.concatenate([lin.b - lin.A @ x0, lin.h - lin.G @ x0])
-    norms = np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel())
-    unit = 1.0 / np.where(norms > 0, norms, 1.0)
-    A, rhs = sp.csc_matrix(sp.diags(unit) @ A), unit * rhs
+    rows, _, _ = lin.in_unit_rows(scale)
+    A = sp.csc_matrix(sp.vstack([rows.A.tocsr(), rows.G.tocsr()]) @ sp.diags(scale))
+    rhs = np.concatenate([rows.b - rows.A @ x0, rows.h - rows.G @ x0])
     projection = ConicProgram(sp.identity(n, format="csc"), np.zeros(n), A, rhs, Cones(zero=n_a, nonneg=n_g))
     result = make_backend(CERTIFYING_BACKEND, projection, 1e-10).solve()
     if result.usable:
