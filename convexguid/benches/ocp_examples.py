@@ -29,6 +29,7 @@ CASES = [
     ("two-instrument slew", "two_instrument_slew", "build", "energy [N^2 m^2 s]"),
     ("OpenSCvx's 6-DoF powered descent", "rocket_6dof_pdg", "build", "-final mass"),
     ("Zhao's dynamic soaring", "dynamic_soaring", "build", "wind gradient [1/s]"),
+    ("Delta III launch, four phases", "phases/delta_iii_launch", "build", "-final mass [kg]"),
 ]
 
 

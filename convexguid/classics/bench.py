@@ -63,6 +63,8 @@ class Row:
     ipopt_iterations: int
     ipopt_setup_s: float
     ipopt_solve_s: float
+    guess: str = "straight line"
+    """Where both solvers start: ``straight line`` (the engine's), or ``stated`` (the statement's own guess)."""
 
     @property
     def error(self) -> float:
@@ -121,22 +123,24 @@ def run_problem(module: ModuleType) -> Row:
     final_intervals = len(solution.nodes.t) - len(phases)
     intervals = str(first_intervals) if final_intervals == first_intervals else \
         f"{first_intervals} -> {final_intervals}"
+    guessed = any(t.problem.guess_nodes is not None for t in phases)
     return Row(name, float(module.PUBLISHED), module.SOURCE, module.FIGURE, solution.status,
                bool(solution.verification is not None and solution.verification.passed), ours, solution.iterations,
-               intervals, elapsed, answer.status, theirs, answer.iterations, answer.setup_s, answer.solve_s)
+               intervals, elapsed, answer.status, theirs, answer.iterations, answer.setup_s, answer.solve_s,
+               "stated" if guessed else "straight line")
 
 
 def document(rows: list[Row], command: str) -> str:
     """validation/CLASSICS.md from the measured rows."""
-    body = [[r.name, r.figure_name, f"{r.published:.7g}", one_line(r.source, 70),
+    body = [[r.name, r.figure_name, f"{r.published:.7g}", one_line(r.source, 70), r.guess,
              f"{r.status}{', verified' if r.verified else ', NOT verified'}", f"{r.figure:.7g}", f"{r.error:+.1e}",
              str(r.iterations), r.intervals, f"{r.time_s:.2f}",
              r.ipopt_status, f"{r.ipopt_figure:.7g}", f"{r.ipopt_error:+.1e}" if math.isfinite(r.ipopt_error) else "-",
              str(r.ipopt_iterations), f"{r.ipopt_setup_s:.2f} + {r.ipopt_solve_s:.2f}"] for r in rows]
-    table = markdown_grid(["problem", "figure", "published", "source", "convexguid", "its figure", "rel. error",
-                           "SCP iterations", "intervals", "time [s]", "IPOPT", "IPOPT figure", "rel. error",
-                           "IPOPT iterations", "IPOPT set-up + solve [s]"],
-                          ["---", "---", "---:", "---", "---", "---:", "---:", "---:", "---:", "---:", "---",
+    table = markdown_grid(["problem", "figure", "published", "source", "guess", "convexguid", "its figure",
+                           "rel. error", "SCP iterations", "intervals", "time [s]", "IPOPT", "IPOPT figure",
+                           "rel. error", "IPOPT iterations", "IPOPT set-up + solve [s]"],
+                          ["---", "---", "---:", "---", "---", "---", "---:", "---:", "---:", "---:", "---:", "---",
                            "---:", "---:", "---:", "---:"], body)
     matched = sum(r.matches for r in rows)
     solved = [r for r in rows if r.ipopt_status in IPOPT_SOLVED and r.ipopt_iterations > 0]
@@ -148,8 +152,10 @@ def document(rows: list[Row], command: str) -> str:
                f"{max(ratios):.2f} (over the {len(ratios)} problems IPOPT solved"
                + (f"; not {', '.join(unsolved)}" if unsolved else "") + ")."
                if ratios else "No IPOPT iteration counts."]
-    caption = ("Each problem stated from its paper in `examples/classics/` with convexguid.ocp: a straight-line "
-               "guess and default settings. convexguid's time runs from the statement to the verified plan "
+    caption = ("Each problem stated from its paper with convexguid.ocp (`examples/classics/`, and the examples "
+               "beside it and in `examples/phases/` that give a published figure), with default settings, from the "
+               "engine's straight-line guess or, where 'guess' says 'stated', the statement's own (the paper's, "
+               "or one the example describes). convexguid's time runs from the statement to the verified plan "
                "(transcription and CasADi derivatives, SCP, the dense SciPy re-propagation, any repair rounds; "
                "'intervals' shows a refinement), in process. IPOPT (exact Hessians, through CasADi) solves the "
                "same transcription from the same guess; its set-up (the NLP and its derivatives) and solve are "
