@@ -26,6 +26,9 @@ Statement choices a user makes here, and why (each measured on 20 intervals a ph
 - The semi-major axis row is stated relative, a / a_f - 1, as the other rows are of order one.
 - The guess climbs continuously from the pad to the target orbit's perigee (position turned and stretched, velocity
   linear, mass linear in each phase), the last phase guessed at 700 s.
+Measured (python -m convexguid.classics, 20 intervals a phase): converged and verified at 7529.715 kg (+7.2e-6 of
+PSOPT's figure) in 85 SCP iterations, about 40 s; IPOPT on the same transcription from the same guess reaches the
+same mass in 1526 iterations. With the constants moved by 1e-12 the plan ends at the same mass to the gram.
 Run: python examples/phases/delta_iii_launch.py
 """
 
