@@ -551,3 +551,26 @@ def test_a_step_is_corrected_only_from_a_trial_point_whose_constraints_are_numbe
     assert correction.wanted(0.1, at_x, finite)
     assert not correction.wanted(0.1, at_x, outside)
     assert not correction.wanted(0.9, at_x, finite)  # a good ratio needs no correction
+
+
+@pytest.mark.parametrize("scale", [[1.0, 1.0], [1e7, 1.0], [1.0, 1e-4]])
+def test_a_hard_row_far_from_unit_size_enters_divided_and_its_multiplier_comes_back_as_stated(scale):
+    """min (x1 - 3)^2 + (x2 - 3)^2 with x1 <= 1 and x2 <= 2 hard, at x = (1, 2): the subproblem's step is 0 and the
+    multipliers are -gradient, (4, 2), whatever the variables' scales. A scale of 1e7 makes x1's row 1e7 long in the
+    scaled step (one of 1e-4 makes x2's 1e-4 short): that row enters the subproblem divided by its length, and its
+    multiplier must come back in the row's stated units."""
+    from convexguid.backends import make_backend
+    from convexguid.scp.assembly import SubproblemAssembler
+
+    x = np.array([1.0, 2.0])
+    linear = LinearConstraints(np.zeros((0, 2)), np.zeros(0), np.eye(2), np.array([1.0, 2.0]))
+    first = Evaluation(x - 3.0, np.eye(2))
+    assembler = SubproblemAssembler(2, first, linear, OutputConstraints.none(2), np.array(scale), np.zeros(2),
+                                    np.ones(2), None)
+    stretched = max(scale) / min(scale) > 100.0
+    assert bool(np.any(np.asarray(assembler._row_units[1]) != 1.0)) == stretched
+    program = assembler.build(x, first, 10.0, 100.0)
+    result = make_backend("clarabel", program, 1e-10).solve()
+    assert result.status == "optimal"
+    assert np.allclose(assembler.step(result.x), 0.0, atol=1e-8)
+    assert assembler.multipliers(result.z).linear_inequality == pytest.approx([4.0, 2.0], rel=1e-6)
