@@ -239,3 +239,16 @@ def test_a_saddle_left_only_by_a_short_step_is_left():
     assert result.status == "converged", result.message
     assert abs(result.x[0]) == pytest.approx(1e-3, abs=1e-8) and result.objective == pytest.approx(1 - 1e-6, abs=1e-8)
     assert "stepped off a saddle" in result.message
+
+
+def test_a_refused_curved_step_is_not_tried_again_at_the_same_iterate():
+    """The flat slew on 16 Chebyshev nodes (cai2018's file, 17 check points): at its optimum, stationarity 1.2e-6
+    against the 1e-6 tolerance, the polish's curved step (8.7e-8, inside the trust region's floor of 1e-7) is refused
+    on a ratio of round-off. The same QP at the same iterate gives the same step, and twelve polish iterations once
+    repeated it (21 iterations); now the next iteration takes the first-order step instead."""
+    sol = solve(PROBLEMS / "cai2018_flat_attitude.yaml", ["discretization.nodes=16"])
+    assert sol.status == "converged", sol.message
+    refused = [(r.iteration, r.step) for r in sol.history if r.solver_status == "curved" and not r.accepted]
+    repeated = [a for a, b in zip(refused, refused[1:], strict=False) if b[0] == a[0] + 1 and b[1] == a[1]]
+    assert not repeated, refused
+    assert sol.iterations <= 10

@@ -140,7 +140,10 @@ class CurvedSubproblem:
         algo = self.algo
         near = max_violation(state.ev) <= CURVED_VIOLATION * algo.settings.feasibility_tolerance
         crawling = near and state.pinned >= CRAWL and not algo.phase1 and algo.program.num_variables <= CURVED_SIZE
-        if state.multipliers is None or not (state.polish or crawling):
+        refused = state.curved_refused_at is not None and np.array_equal(state.curved_refused_at, state.x)
+        if state.multipliers is None or not (state.polish or crawling) or refused:
+            # refused: the step this QP gives here was refused, and the radius did not cut it (at the flat slew's
+            # 16-node optimum, twelve polish iterations repeated one refused step of 8.7e-8: 21 iterations, not 7)
             return None
         working = strongly_active(algo.second_order.working_set(state), state.multipliers)
         model = algo.second_order.at(state, working)

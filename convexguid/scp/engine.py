@@ -278,6 +278,8 @@ class SCPAlgorithm:
             self.move_to(state, trial.x, state.penalty, trial.merit)
             measure_kkt(self, state)
         state.radius = self.trust_region.update(state.radius, ratio, step)
+        if curved is not None and not accepted and step < state.radius:
+            state.curved_refused_at = state.x.copy()  # the same curved QP would give the same step: not again here
         self.record(state, step, ratio, accepted, result if curved is None else replace(result, status="curved"))
         # 5. stop, or raise the penalty
         if self.phase1 and accepted and max_violation(state.ev) <= RESTORED * self.settings.feasibility_tolerance:
