@@ -100,13 +100,21 @@ def followed_scales(problem: Problem, scales: np.ndarray, sizes: np.ndarray) -> 
     return np.where(grown, sizes, scales) if grown.any() else None
 
 
-def following_plan(program: Transcription, z: np.ndarray) -> Transcription | None:
-    """``program`` restated on its grid with its scales :func:`followed_scales` at the plan ``z`` (its states' largest
-    magnitudes over the nodes), the changes listed in its ``scales_followed``; or None when they stay."""
+def plan_scales(program: Transcription, z: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The states' largest magnitudes over the nodes of the plan ``z``, and the scales :func:`followed_scales` gives
+    for them; None when no scale would move."""
     sizes = np.max(np.abs(program.states(z)), axis=0)
     scales = followed_scales(program.problem, program.state_scales, sizes)
-    if scales is None:
+    return None if scales is None else (sizes, scales)
+
+
+def following_plan(program: Transcription, z: np.ndarray) -> Transcription | None:
+    """``program`` restated on its grid with its scales :func:`followed_scales` at the plan ``z``, the changes listed
+    in its ``scales_followed``; or None when they stay."""
+    followed = plan_scales(program, z)
+    if followed is None:
         return None
+    scales = followed[1]
     twin = copy.copy(program.problem)
     twin.states = [replace(v, scale=float(scale), scale_from="stated") for v, scale in zip(twin.states, scales,
                                                                                           strict=True)]
@@ -119,11 +127,13 @@ def following_plan(program: Transcription, z: np.ndarray) -> Transcription | Non
 
 def scale_advice(program: Transcription, z: np.ndarray) -> str:
     """A clause naming each state whose scale was estimated (not stated) and that the plan ``z`` outgrew more than
-    :data:`FOLLOW_FACTOR` times, with its size and its scale; "" when none did. Told with a run that did not end
-    verified: Park and Ramirez's fed-batch volume, scaled by its initial value 1, grew past 14."""
-    sizes = np.max(np.abs(program.states(z)), axis=0)
-    grown = [f"{v.name} ({scale:.3g}, reached {size:.3g})" for v, size, scale in
-             zip(program.problem.states, sizes, program.state_scales, strict=True)
-             if v.scale_from != "stated" and size > FOLLOW_FACTOR * scale]
-    return f"the last plan outgrew the scales estimated for {', '.join(grown)}: state sizes with scale=" \
-        if grown else ""
+    :data:`FOLLOW_FACTOR` times (those :func:`followed_scales` would move), with its scale and size; "" when none
+    did. Told with a run that did not end verified: Park and Ramirez's fed-batch volume, scaled by its initial
+    value 1, grew past 14."""
+    followed = plan_scales(program, z)
+    if followed is None:
+        return ""
+    sizes, scales = followed
+    grown = [f"{v.name} ({old:.3g}, reached {size:.3g})" for v, old, new, size in
+             zip(program.problem.states, program.state_scales, scales, sizes, strict=True) if new != old]
+    return f"the last plan outgrew the scales estimated for {', '.join(grown)}: state sizes with scale="

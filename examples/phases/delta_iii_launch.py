@@ -60,25 +60,8 @@ LAST_PHASE_GUESS = 700.0  # s
 
 def burn(stage: tuple[float, float, float, float]) -> tuple[float, float]:
     """A stage's thrust and its propellant's flow (it burns at a constant rate for its burn time)."""
-    total, propellant, thrust, burn_time = stage
+    _, propellant, thrust, burn_time = stage
     return thrust, propellant / burn_time
-
-
-def phases_table() -> list[tuple[float, float, float, float]]:
-    """Per phase: thrust [N], mass flow [kg/s], mass at its start and at its end [kg], all engines at full burn."""
-    boosters, first, second = burn(BOOSTER), burn(FIRST), burn(SECOND)
-    engines = [((6, boosters), (1, first)), ((3, boosters), (1, first)), ((1, first),), ((1, second),)]
-    dropped = [0.0, 6 * (BOOSTER[0] - BOOSTER[1]), 3 * (BOOSTER[0] - BOOSTER[1]), FIRST[0] - FIRST[1]]
-    mass = PAYLOAD + SECOND[0] + FIRST[0] + 9 * BOOSTER[0]
-    table, start = [], 0.0
-    for k, running in enumerate(engines):
-        thrust = sum(n * t for n, (t, _) in running)
-        flow = sum(n * f for n, (_, f) in running)
-        mass -= dropped[k]
-        end = mass - flow * (ENDS[k] - start) if k < 3 else PAYLOAD
-        table.append((thrust, flow, mass, end))
-        mass, start = end, ENDS[k]
-    return table
 
 
 def dropped_mass(k: int) -> float:
@@ -86,12 +69,34 @@ def dropped_mass(k: int) -> float:
     return (6 * (BOOSTER[0] - BOOSTER[1]), 3 * (BOOSTER[0] - BOOSTER[1]), FIRST[0] - FIRST[1])[k]
 
 
+def phases_table() -> list[tuple[float, float, float, float]]:
+    """Per phase: thrust [N], mass flow [kg/s], mass at its start and at its end [kg], all engines at full burn."""
+    boosters, first, second = burn(BOOSTER), burn(FIRST), burn(SECOND)
+    engines = [((6, boosters), (1, first)), ((3, boosters), (1, first)), ((1, first),), ((1, second),)]
+    mass = PAYLOAD + SECOND[0] + FIRST[0] + 9 * BOOSTER[0]
+    table, start = [], 0.0
+    for k, running in enumerate(engines):
+        thrust = sum(n * t for n, (t, _) in running)
+        flow = sum(n * f for n, (_, f) in running)
+        mass -= dropped_mass(k - 1) if k else 0.0
+        end = mass - flow * (ENDS[k] - start) if k < 3 else PAYLOAD
+        table.append((thrust, flow, mass, end))
+        mass, start = end, ENDS[k]
+    return table
+
+
+PHASES = phases_table()
+
+
 def about_z(angle: float) -> np.ndarray:
+    """The active rotation by ``angle`` about z (convexguid.rotations gives the same as the transpose of a DCM built
+    from quaternions, equal to 1e-16; those last bits moved this run's path from 85 to 100 iterations)."""
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def about_x(angle: float) -> np.ndarray:
+    """The active rotation by ``angle`` about x."""
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
@@ -103,12 +108,13 @@ def orbit_state(true_anomaly: float) -> tuple[np.ndarray, np.ndarray]:
     radius = p / (1 + e * math.cos(true_anomaly))
     in_plane_r = radius * np.array([math.cos(true_anomaly), math.sin(true_anomaly), 0.0])
     in_plane_v = math.sqrt(MU / p) * np.array([-math.sin(true_anomaly), e + math.cos(true_anomaly), 0.0])
-    rotation = about_z(node) @ about_x(inclination) @ about_z(perigee)
+    rotation = about_z(node) @ about_x(inclination) @ about_z(perigee)  # perifocal to inertial, 3-1-3
     return rotation @ in_plane_r, rotation @ in_plane_v
 
 
 def pad_state() -> tuple[np.ndarray, np.ndarray]:
-    """Position and velocity at lift-off: on the equator's meridian at 28.5 deg latitude, turning with the Earth."""
+    """Position and velocity at lift-off: at 28.5 deg latitude on the meridian of the x axis, turning with the
+    Earth."""
     r = np.array([R_E * math.cos(LATITUDE), 0.0, R_E * math.sin(LATITUDE)])
     return r, np.cross([0.0, 0.0, OMEGA], r)
 
@@ -128,7 +134,7 @@ def orbit_rows(r, v) -> tuple[list, ca.SX, ca.SX]:
 
 
 def stage(k: int, intervals: int, scales: tuple[float | None, float | None]) -> tuple[Problem, ca.SX, ca.SX, ca.SX]:
-    thrust, flow, mass_start, mass_end = phases_table()[k]
+    thrust, flow, mass_start, mass_end = PHASES[k]
     position_scale, velocity_scale = scales
     p = Problem(f"stage{k + 1}")
     at_pad = np.concatenate(pad_state())
@@ -168,7 +174,7 @@ def climbing_guess(problems: list[Problem], intervals: int) -> None:
                      + np.sin(s * angle) * end_r / np.linalg.norm(end_r)) / math.sin(angle)
         r = direction * (np.linalg.norm(start_r) + s * (np.linalg.norm(end_r) - np.linalg.norm(start_r)))
         v = start_v + s * (end_v - start_v)
-        _, _, mass_start, mass_end = phases_table()[k]
+        _, _, mass_start, mass_end = PHASES[k]
         m = mass_start + share[:, None] * (mass_end - mass_start)
         p.initial_guess(np.hstack([r, v, m]), v / np.linalg.norm(v, axis=1)[:, None])
 
