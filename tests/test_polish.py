@@ -138,3 +138,50 @@ def test_a_warm_start_gets_a_funnel_without_the_cold_starts_floor():
     policy = FunnelPolicy()
     assert policy.initial(2.6e-3).width == 1.0
     assert policy.initial(2.6e-3, warm=True).width == pytest.approx(2.6e-2)
+
+
+def test_a_curved_step_clarabel_cannot_solve_in_its_low_rank_form_is_solved_with_the_clipped_matrix(monkeypatch):
+    """The low-rank form's objective is convex only where ``w = F^T u`` holds; where Clarabel fails on it (Luus'
+    singular problem failed every curved step so), the same QP with the clipped Hessian as it is gives the step. Here
+    the low-rank form is made to fail (an equality ``0 = 1`` appended); slew #7 is still polished by curved steps."""
+    import convexguid.scp.curved as curved_module
+
+    def failing(program, n, factor):
+        lifted = with_low_rank(program, n, factor)
+        impossible = sp.csr_matrix((1, lifted.num_variables))
+        return ConicProgram(lifted.P, lifted.q, sp.vstack([impossible, lifted.A], format="csc"),
+                            np.concatenate([[1.0], lifted.b]), Cones(zero=lifted.cones.zero + 1,
+                                                                      nonneg=lifted.cones.nonneg,
+                                                                      soc=lifted.cones.soc), lifted.constant)
+
+    monkeypatch.setattr(curved_module, "with_low_rank", failing)
+    slew = [t for t in random_minimum_time_slews(PROBLEMS, 12, 19)][7]
+    sol = solve(parse_problem(slew.problem, slew.source))
+    assert sol.status == "converged" and sol.summary()["kkt"]["met"], sol.message
+    assert any(r.solver_status == "curved" for r in sol.history)
+
+
+def luus_singular(intervals: int):
+    """Luus' singular problem as PSOPT's applications document states it (``singular5``; PSOPT: 0.1192613 on 100
+    Legendre nodes): the integral of x1^2 + x2^2 + 5e-4 (x2 + 16 t - 8 - 0.1 x3 u^2)^2 over t in [0, 1], with
+    x1' = x2, x2' = -x3 u + 16 t - 8, x3' = u, x(0) = (0, -1, -sqrt 5) and 0 <= u <= 10."""
+    from convexguid.ocp import Problem
+
+    p = Problem("luus-singular")
+    x1, x2, x3 = p.state("x1", initial=0.0), p.state("x2", initial=-1.0), p.state("x3", initial=-np.sqrt(5.0))
+    u = p.control("u", bounds=(0, 10))
+    p.dynamics({x1: x2, x2: -x3 * u + 16 * p.time - 8, x3: u})
+    p.final_time(fixed=1.0)
+    p.minimize_integral(x1**2 + x2**2 + 5e-4 * (x2 + 16 * p.time - 8 - 0.1 * x3 * u**2) ** 2)
+    p.transcription(intervals)
+    return p
+
+
+def test_linear_steps_a_stiff_model_holds_back_hand_over_to_the_curved_step():
+    """Along Luus' singular arc the convex model is stiffer than the problem: its linear steps stay inside the trust
+    region with merit ratios near 2. Two of them in a row now count as pinned ones, and the curved step takes over:
+    after 40 iterations on 50 intervals it has been taken and the cost is within 0.3% of PSOPT's 0.1192613 (before,
+    none was, and the cost stood at 0.12013 after 40, 0.11952 after 489)."""
+    sol = luus_singular(50).solve(max_iterations=40)
+    assert any(r.solver_status == "curved" for r in sol.history)
+    assert sol.objective < 0.1196

@@ -162,20 +162,25 @@ class CurvedSubproblem:
                                    algo.cost, algo.weights)
         values = model.working.values(ev, linear, algo.outputs, state.x)
         name, fallback = self.backend_name()
-        # on Clarabel H_gamma and the low-rank F, whose pattern changes with the working set (a backend per solve);
-        # a dense backend takes the eigen-clipped Hessian as it is
-        sparse = name == "clarabel"
+        if name == "clarabel":
+            # H_gamma and the low-rank F, whose pattern changes with the working set (a backend per solve)
+            program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
+                                             curved=model.terms(values, sparse=True))
+            rank = model.factor.shape[1]
+            _, result, value = algo.solved(state, with_low_rank(program_k, algo.program.num_variables, model.factor),
+                                           None, name, fallback)
+            if result.usable:
+                return replace(result, x=result.x[: result.x.size - rank],
+                               z=None if result.z is None else result.z[rank:]), value
+            # that objective is convex only where w = F^T u holds, and an interior-point solver wants it convex
+            # everywhere: with large negative eigenvalues in H_gamma Clarabel's factorization fails (Luus' singular
+            # problem, every curved step); the same QP with the clipped matrix as it is (docs/engine.md)
         program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
-                                         curved=model.terms(values, sparse=sparse))
-        if not sparse:
-            # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
-            like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
-            self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)
+                                         curved=model.terms(values, sparse=False))
+        if name == "clarabel":
+            _, result, value = algo.solved(state, program_k, None, name, fallback)
             return result, value
-        rank = model.factor.shape[1]
-        _, result, value = algo.solved(state, with_low_rank(program_k, algo.program.num_variables, model.factor),
-                                       None, name, fallback)
-        if result.x is not None:
-            result = replace(result, x=result.x[: result.x.size - rank],
-                             z=None if result.z is None else result.z[rank:])
+        # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
+        like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
+        self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)
         return result, value

@@ -70,6 +70,11 @@ the violation's minimum (measured: docs/engine.md, 'Restoration and phase 1').""
 PINNED = 0.9
 """A linear subproblem's step of at least this share of the trust radius reached it (see ``IterationState.pinned``)."""
 
+STIFF = 1.5
+"""A linear step inside the trust region whose merit fell by more than this many times its prediction was held back
+by a model stiffer than the problem (Luus' singular arc: ratios near 2, the actual curvature along the step near zero);
+it counts with the pinned ones (see ``IterationState.pinned``; measured: docs/engine.md, 'Curved subproblem')."""
+
 POLISH_ITERATIONS = 40
 """More stalls a feasible point short of the KKT tolerance may polish through (the curved subproblem, Newton's
 steps) before it is reported ``unverified``; at 20 a run along a long flat valley ended ``unverified``
@@ -262,7 +267,8 @@ class SCPAlgorithm:
                     trial, d = soc, soc.x - state.x
         step = float(np.max(np.abs(d) / self.scale, initial=0.0))
         if curved is None:
-            state.pinned = state.pinned + 1 if step >= PINNED * state.radius else 0
+            held = step >= PINNED * state.radius or trial.ratio > STIFF  # by the region, or by a stiff model
+            state.pinned = state.pinned + 1 if held else 0
         if newton is not None:
             if not newton.accepted:
                 state.newton_radius = 0.25 * newton.step

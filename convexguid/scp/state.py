@@ -61,7 +61,8 @@ class IterationState:
     kept: int = 0
     """Accepted steps in a row inside the trust region that kept the violation (the penalty's steering)."""
     pinned: int = 0
-    """Linear subproblems in a row whose step reached the trust region: the model lacks the curvature to stop it."""
+    """Linear subproblems in a row whose step reached the trust region (the model lacks the curvature to stop it) or
+    whose merit fell far more than predicted (its curvature is more than the problem's): the model is wrong."""
     curved_refused_at: np.ndarray | None = None
     """The iterate where a curved step inside its trust region was refused: the same QP there gives it again."""
     escape_log: list[str] = field(default_factory=list)
