@@ -76,10 +76,9 @@ beyond 1e5 alone; dividing every row moved Bilimoria and Wie's slew to a local m
 
 class SubproblemRows:
     """The constraint rows the lifted and the condensed subproblem share, their pattern fixed once from the first
-    :class:`Evaluation`: a dense Jacobian block gets a dense pattern, a ``scipy.sparse.coo_matrix`` keeps its own (every
-    later evaluation must list the same ``(row, col)`` entries in the same order). ``lifted`` keeps the residuals as
-    variables (``J d - y = -r`` rows, the output constraints on ``y``); otherwise the output constraints take ``M J``
-    on the step, dense."""
+    :class:`Evaluation`: a dense Jacobian block gets a dense pattern, a ``scipy.sparse.coo_matrix`` keeps its own (see
+    :class:`~convexguid.scp.problem.ConstraintBlock`). ``lifted`` keeps the residuals as variables (``J d - y = -r``
+    rows, the output constraints on ``y``); otherwise the output constraints take ``M J`` on the step, dense."""
 
     def __init__(self, n: int, first: Evaluation, linear: LinearConstraints, outputs: OutputConstraints,
                  scale: np.ndarray, weights: np.ndarray, curvature: tuple[np.ndarray, np.ndarray] | None,
@@ -90,8 +89,7 @@ class SubproblemRows:
         # as stated); the rows of a unit's size are left as stated, as the backends' own equilibration handles them
         self.linear, *self._row_units = stated.in_unit_rows(scale, within=UNIT_ROWS)
         linear = self.linear
-        # a hard inequality the iterate meets only to the backend's tolerance (1e-7 of 1 + |h| as stated) must not
-        # make d = 0 infeasible
+        # a hard inequality met to the backend's tolerance (1e-7 of 1 + |h| as stated) must not make d = 0 infeasible
         self._room_floor = -1e-7 * self._row_units[1] * (1 + np.abs(stated.h))
         self.outputs, self.scale, self.weights, self.curvature = outputs, scale, weights, curvature
         self.n_ineq = sum(b.values.size for b in first.inequalities)
@@ -214,8 +212,7 @@ class SubproblemAssembler(SubproblemRows):
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
               hessian: np.ndarray | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (``ev`` must carry Jacobians; ``hessian``: the curvature model's entries on its
-        pattern, positive semidefinite)."""
+        """The subproblem about ``x`` (``ev`` with Jacobians; ``hessian``: the curvature model's entries)."""
         head = [_jacobian_data(self.linear.A), _jacobian_data(ev.residual_jacobian), -np.ones(self.m),
                 _jacobian_data(self.linear.G), self._m_data, -np.ones(self.outputs.M.shape[0])]
         A, b = self.constraints(x, ev, radius, head, [-ev.residuals, self.outputs.m])

@@ -113,8 +113,7 @@ def worst_violations(verification: Verification, count: int = 3) -> str:
 
 
 FOLLOW_VIOLATION = 1e-2
-"""The first solve stops at its first accepted iterate whose violation is within this (each block in its own unit, a
-defect in state scales) to let the program follow the plan with its scales: the plan's sizes then mean something."""
+"""Violation (each block in its own unit, a defect in state scales) within which the plan's sizes mean something."""
 
 
 class PlanFollower:

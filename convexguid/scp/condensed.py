@@ -33,8 +33,7 @@ from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstrai
 
 @dataclass(frozen=True)
 class CurvedTerms:
-    """A model Hessian in the scaled step ``u`` that replaces the condensed one, with the linear and constant terms
-    that come with it (:mod:`convexguid.scp.curved`)."""
+    """The curved subproblem's Hessian in ``u`` (replacing the condensed one) with its linear and constant terms."""
 
     hessian: np.ndarray | sp.csc_matrix
     linear: np.ndarray
@@ -60,12 +59,10 @@ class CondensedAssembler(SubproblemRows):
 
     def build(self, x: np.ndarray, ev: Evaluation, radius: float, penalty: float,
               hessian: np.ndarray | None = None, curved: CurvedTerms | None = None) -> ConicProgram:
-        """The subproblem about ``x`` (as :meth:`~convexguid.scp.assembly.SubproblemAssembler.build` makes it);
-        ``curved`` replaces its whole Hessian in ``u`` (scaled, positive semidefinite, Gauss-Newton part included) and
-        adds its linear and constant terms (:mod:`convexguid.scp.curved`)."""
+        """The subproblem about ``x`` (as :meth:`~convexguid.scp.assembly.SubproblemAssembler.build` makes it), with
+        the :class:`CurvedTerms` ``curved`` if given (its Hessian positive semidefinite, Gauss-Newton part included)."""
         n, scale = self.n, self.scale
-        r = ev.residuals
-        jac = ev.residual_jacobian
+        r, jac = ev.residuals, ev.residual_jacobian
         J = jac.toarray() if sp.issparse(jac) else np.asarray(jac, dtype=float).reshape(self.m, n)
         head = [_jacobian_data(self.linear.A), _jacobian_data(self.linear.G), self._M @ J, -np.ones(self._M.shape[0])]
         A, b = self.constraints(x, ev, radius, head, [np.zeros(0), self.outputs.m - self._M @ r])

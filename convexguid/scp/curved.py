@@ -77,8 +77,7 @@ def convexified(hessian: np.ndarray, rows: np.ndarray, weight: float = AUGMENTAT
 
 def with_low_rank(program: ConicProgram, n: int, factor: np.ndarray) -> ConicProgram:
     """``program`` (its first ``n`` variables the step ``u``) with :math:`\\tfrac12 \\|F^T u\\|^2` added to its
-    objective as :math:`\\tfrac12 \\|w\\|^2` over new last variables :math:`w = F^T u` (equality rows put first),
-    which keeps it sparse (docs/engine.md, 'Curved subproblem')."""
+    objective as :math:`\\tfrac12 \\|w\\|^2` over new last variables :math:`w = F^T u` (equality rows put first)."""
     rank, size = factor.shape[1], program.num_variables
     if rank == 0:
         return program
@@ -103,17 +102,15 @@ class CurvedModel:
 
     def terms(self, values: np.ndarray, sparse: bool) -> CurvedTerms:
         """The subproblem's terms when the working rows take ``values`` at the iterate: the augmentation is
-        :math:`\\tfrac\\gamma2 \\|A_W S u + c\\|^2`, zero wherever the step meets their linearization, so neither
-        the model's value nor the subproblem's multipliers carry it there. ``sparse``: the Hessian as
-        :math:`H_\\gamma` (sparse), the subproblem to be given :math:`F` by :func:`with_low_rank`."""
+        :math:`\\tfrac\\gamma2 \\|A_W S u + c\\|^2` (zero where the step meets their linearization). ``sparse``: the
+        Hessian as :math:`H_\\gamma` (sparse), the subproblem to be given :math:`F` by :func:`with_low_rank`."""
         hessian = sp.csc_matrix(self.augmented) if sparse else self.hessian
         return CurvedTerms(hessian, self.gamma * (self.rows.T @ values), 0.5 * self.gamma * float(values @ values))
 
 
 def strongly_active(working: WorkingSet, multipliers: Multipliers) -> WorkingSet:
-    """``working`` without the inequalities whose multiplier is not significant (below 1e-6 of the largest): the
-    augmentation holds each row it covers to its linearization, and a row that merely touches its bound (a keep-out
-    cone met between check points) must stay free to leave it (measured: docs/engine.md, 'Curved subproblem')."""
+    """``working`` without the inequalities whose multiplier is not significant (below 1e-6 of the largest): one that
+    merely touches its bound must stay free to leave it (measured: docs/engine.md, 'Curved subproblem')."""
     significant = multipliers.significant()
     return replace(working, linear_inequality=working.linear_inequality & (multipliers.linear_inequality > significant),
                    output=working.output & (multipliers.output > significant),
@@ -129,8 +126,7 @@ class CurvedSubproblem:
         self.backend: Backend | None = None
 
     def backend_name(self) -> tuple[str, str | None]:
-        """DAQP (Clarabel re-solving an answer it does not grade optimal) where the run's own subproblems went to it,
-        else Clarabel (why, measured: docs/engine.md, 'Curved subproblem')."""
+        """DAQP where the run's subproblems use it (Clarabel re-solving answers not graded optimal), else Clarabel."""
         choice = self.algo.choice
         return ("daqp", "clarabel") if choice is not None and choice.backend == "daqp" else ("clarabel", None)
 
@@ -172,14 +168,12 @@ class CurvedSubproblem:
             if result.usable:
                 return replace(result, x=result.x[: result.x.size - rank],
                                z=None if result.z is None else result.z[rank:]), value
-            # that objective is convex only where w = F^T u holds, and an interior-point solver wants it convex
-            # everywhere: with large negative eigenvalues in H_gamma Clarabel's factorization fails (Luus' singular
-            # problem, every curved step); the same QP with the clipped matrix as it is (docs/engine.md)
+            # that objective is convex only where w = F^T u holds: with large negative eigenvalues in H_gamma Clarabel
+            # fails on it (Luus' singular problem); the same QP with the clipped matrix as it is (docs/engine.md)
         program_k = self.assembler.build(state.x, ev, algo.box(state), state.penalty,
                                          curved=model.terms(values, sparse=False))
         if name == "clarabel":
-            _, result, value = algo.solved(state, program_k, None, name, fallback)
-            return result, value
+            return algo.solved(state, program_k, None, name, fallback)[1:]
         # on the run's own assembly and backend kind, the backend is the run's one's sibling (its layout shared)
         like = algo.backend if self.assembler is algo.assembler and name == algo.choice.backend else None
         self.backend, result, value = algo.solved(state, program_k, self.backend, name, fallback, like=like)

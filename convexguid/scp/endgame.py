@@ -90,9 +90,8 @@ def least_norm_step(split: tuple[np.ndarray, ...], values: np.ndarray) -> np.nda
 
 def newton_step(gradient: np.ndarray, hessian: np.ndarray, rows: np.ndarray, values: np.ndarray) -> NewtonStep:
     """The EQP step for gradient ``g``, Hessian ``H``, working-set rows ``A`` and values ``c`` (all scaled): range
-    part :math:`d_Y = -Y (R^T)^{-1} (D^{-1} c)_P` (least norm onto the linearized working set), null-space part from
-    :math:`Z^T H Z\\, p = -Z^T (g + H d_Y)`, multipliers from :math:`R\\, (D y)_P = -Y^T (g + H d)` (zero on
-    dependent rows; :func:`null_space_split` for :math:`D`)."""
+    part :math:`d_Y` from :func:`least_norm_step`, null-space part from :math:`Z^T H Z\\, p = -Z^T (g + H d_Y)`,
+    multipliers from :math:`R\\, (D y)_P = -Y^T (g + H d)` (zero on dependent rows; :func:`null_space_split`)."""
     split = null_space_split(rows)
     Y, Z, R, pivots, norms = split
     range_step = least_norm_step(split, values)
@@ -254,12 +253,10 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
         return None
     working = models.working_set(state)
     settled, state.working_set = working == state.working_set, working
-    if not settled:
-        # the subproblems' working set still changes from one iteration to the next: not yet Newton's turn
+    if not settled:  # the subproblems' working set still changes: not yet Newton's turn
         return None
     model, newton = _within_bounds(algo, state, models.at(state, working))
-    if newton.step is None:
-        # no step: the working set is not settled (a bound outside it stops the step)
+    if newton.step is None:  # a bound outside the working set stops the step: it is not settled
         return None
     length = float(np.max(np.abs(newton.step), initial=0.0))
     radius = min(state.radius, state.newton_radius)

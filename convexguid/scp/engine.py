@@ -71,14 +71,12 @@ PINNED = 0.9
 """A linear subproblem's step of at least this share of the trust radius reached it (see ``IterationState.pinned``)."""
 
 STIFF = 1.5
-"""A linear step inside the trust region whose merit fell by more than this many times its prediction was held back
-by a model stiffer than the problem (Luus' singular arc: ratios near 2, the actual curvature along the step near zero);
-it counts with the pinned ones (see ``IterationState.pinned``; measured: docs/engine.md, 'Curved subproblem')."""
+"""A linear step inside the trust region whose merit fell more than this many times its prediction counts as pinned: a
+model stiffer than the problem held it back (Luus' singular arc: ratios near 2; docs/engine.md, 'Curved subproblem')."""
 
 POLISH_ITERATIONS = 40
-"""More stalls a feasible point short of the KKT tolerance may polish through (the curved subproblem, Newton's
-steps) before it is reported ``unverified``; at 20 a run along a long flat valley ended ``unverified``
-(docs/engine.md, 'KKT certificates and the polish')."""
+"""More stalls a feasible point short of the KKT tolerance may polish through before it is reported ``unverified`` (at
+20 a run along a long flat valley ended so: docs/engine.md, 'KKT certificates and the polish')."""
 
 
 class Trial(NamedTuple):
@@ -92,9 +90,8 @@ class Trial(NamedTuple):
 
 
 class SCPAlgorithm:
-    """The SCP loop on one program: ``state = initialize(x0)``, then ``step(state)`` until finished. ``phase1``
-    marks the elastic phase-1 run (objective dropped): a stall with constraints violated then ends ``infeasible``
-    (the certificate) instead of raising the penalty."""
+    """The SCP loop on one program: ``state = initialize(x0)``, then ``step(state)`` until finished. ``phase1`` marks
+    the elastic phase-1 run, where a stall with constraints violated ends ``infeasible`` (the certificate)."""
 
     def __init__(self, program: NonconvexProgram, settings: SCPSettings, log: Log | None = None,
                  phase1: bool = False) -> None:
@@ -110,10 +107,9 @@ class SCPAlgorithm:
         self.linear = program.linear_constraints()  # fixed for the run: read once
         self.scale = program.variable_scale()
         self.evaluations = ProgramEvaluations(program)
-        guarded = getattr(program, "guarded_bounds", None)
-        self.guarded = guarded() if guarded is not None else None
-        model = getattr(program, "curvature_model", None)
-        self.curvature: CurvatureModel | None = model() if model is not None else None  # None: affine constraints
+        self.guarded = program.guarded_bounds() if hasattr(program, "guarded_bounds") else None
+        model = program.curvature_model() if hasattr(program, "curvature_model") else None
+        self.curvature: CurvatureModel | None = model  # None: affine constraints
         self.second_order: SecondOrderModels | None = None
         self.curved: CurvedSubproblem | None = None
         self.assembler: SubproblemAssembler | CondensedAssembler | None = None
@@ -183,8 +179,7 @@ class SCPAlgorithm:
 
     def _solve_subproblem(self, state: IterationState, ev: Evaluation, hessian: np.ndarray | None,
                           curved: CurvedModel | None = None) -> tuple[BackendResult, float]:
-        """The backend's answer, and the subproblem's model of the merit after its step (the curved subproblem's
-        when its model ``curved`` is given)."""
+        """The backend's answer and the model's merit after its step (the curved subproblem's for ``curved``)."""
         if curved is not None:
             return self.curved.solve(state, ev, curved)
         program_k = self.assembler.build(state.x, ev, self.box(state), state.penalty, hessian)
@@ -231,8 +226,7 @@ class SCPAlgorithm:
         report("SCP phase-1 iteration" if self.phase1 else "SCP iteration", state.iteration + 1)
         state.iteration += 1
         self._relax_penalty(state)
-        # 1-2. convexify and solve: the curved subproblem when wanted, the linear one when it is not or when it fails or
-        # sees no decrease (docs/engine.md, 'Curved subproblem')
+        # 1-2. convexify, solve: the curved subproblem if wanted; the linear one if not, if it fails or sees no decrease
         curved = self.curved.model(state) if self.curved is not None else None
         hessian = self._curvature_values(state)
         result, model = self._solve_subproblem(state, state.raw, hessian, curved)
@@ -396,8 +390,7 @@ class SCPAlgorithm:
         return Trial(x, raw, ev, merit_x, decrease_ratio(merit - merit_x, predicted))
 
     def move_to(self, state: IterationState, x: np.ndarray, penalty: float, merit: float | None = None) -> None:
-        """Make ``x`` the iterate: its evaluation with Jacobians, objective and merit (with weight ``penalty``, unless
-        its trial point's ``merit`` is given)."""
+        """Make ``x`` the iterate: its evaluation with Jacobians, objective, merit (``merit`` or at ``penalty``)."""
         state.x, state.penalty = x, penalty
         state.raw, state.ev = self._evaluate(state, x, jacobians=True)
         state.objective = self.objective(state.ev, x)

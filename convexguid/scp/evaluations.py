@@ -10,8 +10,7 @@ import numpy as np
 from convexguid.scp.problem import Evaluation, NonconvexProgram
 
 MAX_TRIALS_KEPT = 8
-"""Trial points of one iteration whose evaluations are kept (an iteration tries at most four: the step, Newton's,
-and a second-order correction of each)."""
+"""Trial evaluations kept per iteration (four at most: the step, Newton's, a second-order correction of each)."""
 
 
 def not_finite(ev: Evaluation) -> str:

@@ -92,8 +92,7 @@ def _transpose_times(jacobian, y: np.ndarray):
 
 
 def has_jacobian(ev: Evaluation) -> bool:
-    """Whether some nonlinear map (residuals, inequalities, equalities) has a Jacobian entry: a dense block counts
-    whole, a sparse one by its fixed pattern."""
+    """Whether a nonlinear map (residuals, inequalities, equalities) has a Jacobian entry (sparse: by its pattern)."""
     blocks = [ev.residual_jacobian, *(b.jacobian for b in (*ev.inequalities, *ev.equalities))]
     return any(b is not None and b.shape[0] > 0 and (not sp.issparse(b) or b.nnz > 0) for b in blocks)
 
@@ -104,7 +103,7 @@ class WorkingSet:
     hard equalities ``A x = b`` always; a nonlinear equality unless its multiplier reached the penalty weight (the
     subproblem paid to leave it unmet); an inequality (hard ``G x <= h``, output ``M r <= m``, nonlinear ``g``) when its
     multiplier is significant (and below the penalty weight, if softened) or its value is within the tolerance of its
-    bound. Its rows' values and Jacobian can then be read at any point."""
+    bound."""
 
     linear_inequality: np.ndarray
     output: np.ndarray

@@ -82,20 +82,17 @@ def measure_kkt(algo: SCPAlgorithm, state: IterationState) -> None:
         return
     x, raw, multipliers, linear, outputs = state.x, state.raw, state.multipliers, algo.linear, algo.outputs
     gradient = algo.cost + lagrangian_gradient(raw, multipliers.curvature_weights(raw.residuals, algo.weights, outputs))
-    A, G = linear.A, linear.G  # dense or sparse, as the program gives them
-    if A.shape[0]:
-        gradient = gradient + A.T @ multipliers.linear_equality
-    if G.shape[0]:
-        gradient = gradient + G.T @ multipliers.linear_inequality
-    for block, duals in _cone_duals(raw, multipliers):
-        gradient = gradient - block.jacobian.T @ duals  # the cone v(x) in Q: -F^T y, y in Q
-    stationarity = float(np.max(np.abs(gradient * algo.scale), initial=0.0))
+    for M, y in ((linear.A, multipliers.linear_equality), (linear.G, multipliers.linear_inequality)):  # dense or sparse
+        if M.shape[0]:
+            gradient = gradient + M.T @ y
     products = [multipliers.linear_inequality * linear.gap(x), multipliers.output * outputs.gap(raw.residuals)]
     products += [mu * block.values for block, mu in per_block(raw.inequalities, multipliers.inequality)]
     for block, duals in _cone_duals(raw, multipliers):
+        gradient = gradient - block.jacobian.T @ duals  # the cone v(x) in Q: -F^T y, y in Q
         ends = np.cumsum(block.sizes)
         products.append(np.array([duals[end - size: end] @ block.values[end - size: end]
                                   for end, size in zip(ends, block.sizes, strict=True)]))
+    stationarity = float(np.max(np.abs(gradient * algo.scale), initial=0.0))
     complementarity = float(np.max(np.abs(np.concatenate(products)), initial=0.0))
     unit = max(abs(state.objective), 1e-3 * algo.objective_size)
     # an objective without a size (a boundary-value problem stated with a zero cost) makes them absolute: relative to
@@ -119,8 +116,7 @@ def kkt_met(algo: SCPAlgorithm, state: IterationState) -> bool:
 def certified_here(algo: SCPAlgorithm, state: IterationState, result: BackendResult, predicted: float) -> bool:
     """Whether the subproblem just solved at the iterate proves it a KKT point (then the run ends there): its
     multipliers meet the KKT tolerance and the decrease it still ``predicted`` is within the same tolerance of the
-    objective. Without this certificate the last step of a converged run may be refused on a ratio of round-off-sized
-    decreases (measured: docs/engine.md, 'KKT certificates and the polish')."""
+    objective (why, measured: docs/engine.md, 'KKT certificates and the polish')."""
     measure_kkt(algo, state)
     if not kkt_met(algo, state) or predicted > algo.settings.kkt_tolerance * state.kkt.objective_unit:
         return False
@@ -200,10 +196,9 @@ NEAR_ACTIVE = 1e-6
 
 def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Multipliers | None:
     """The multipliers that best satisfy stationarity at the iterate, :math:`\\min \\|S(\\nabla f + A_W^T y)\\|_2`
-    (bounded least squares, :func:`bounded_least_squares`): nonnegative on the
-    inequalities within :data:`NEAR_ACTIVE` of their bounds, free on the equalities, zero elsewhere; a second-order
-    cone within :data:`NEAR_ACTIVE` of its boundary (not at its apex) is the inequality
-    :math:`\\|v_{1:}\\| - v_0 \\le 0` there, whose multiplier :math:`\\mu` is the cone dual
+    (:func:`bounded_least_squares`): nonnegative on the inequalities within :data:`NEAR_ACTIVE` of their bounds, free
+    on the equalities, zero elsewhere; a second-order cone within :data:`NEAR_ACTIVE` of its boundary (not at its apex)
+    is the inequality :math:`\\|v_{1:}\\| - v_0 \\le 0` there, whose multiplier :math:`\\mu` is the cone dual
     :math:`\\mu (1, -v_{1:}/\\|v_{1:}\\|)` (:func:`_cone_rows`). Where the active constraints are degenerate the
     subproblem's own multipliers can miss by far more (docs/engine.md, 'KKT certificates and the polish')."""
     raw, linear, outputs = state.raw, algo.linear, algo.outputs
@@ -228,13 +223,11 @@ def least_squares_multipliers(algo: SCPAlgorithm, state: IterationState) -> Mult
 
 
 def bounded_least_squares(matrix: sp.csc_matrix, target: np.ndarray, lower: np.ndarray) -> np.ndarray | None:
-    """:math:`\\min_y \\|M y - t\\|_2` with :math:`y_i \\ge` ``lower`` where that is finite (0 or :math:`-\\infty`),
-    as the second-order cone program :math:`\\min s` over :math:`\\|M y - t\\| \\le s` (Clarabel, sparse): its
-    :math:`y` (the signed entries clipped at 0), or None when Clarabel does not solve it. The norm itself is the
-    objective, so Clarabel's gap tolerance bounds the residual, not its square: as a QP in :math:`\\|r\\|^2` a
-    tolerance of 1e-10 left residuals of 6e-5 (docs/engine.md, 'Least-squares multipliers'). Where the minimizers
-    form a face (degenerate active constraints), the interior method returns a point inside it, not one of its
-    vertices, which an active set (BVLS) picks by the order of its pivots."""
+    """:math:`\\min_y \\|M y - t\\|_2` with :math:`y_i \\ge` ``lower`` where that is finite (0 or :math:`-\\infty`), as
+    the second-order cone program :math:`\\min s` over :math:`\\|M y - t\\| \\le s` (Clarabel, sparse): its :math:`y`
+    (the signed entries clipped at 0), or None when Clarabel does not solve it. The norm itself is the objective, so
+    Clarabel's gap tolerance bounds the residual, not its square; where the minimizers form a face (degenerate active
+    constraints) it returns a point inside it (both measured: docs/engine.md, 'KKT certificates and the polish')."""
     m, n = matrix.shape
     signed = np.flatnonzero(np.isfinite(lower))
     sign_rows = sp.csr_matrix((-np.ones(signed.size), (np.arange(signed.size), signed)), shape=(signed.size, n + 1))

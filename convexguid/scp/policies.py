@@ -67,14 +67,13 @@ class TrustRegionPolicy:
 
 @dataclass(frozen=True)
 class PenaltyPolicy:
-    """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty: its start, how it follows the multipliers, its rise.
-    With ``unit = "objective"`` the weights are counted in units of the objective's size at the start (the engine
-    passes it: :math:`|f(x_0)|`, or :math:`|c|^T \\sigma` if larger), with ``unit = "absolute"`` as given. The penalty
-    is exact for any weight above the largest multiplier :math:`\\|\\lambda\\|_\\infty` (Nocedal & Wright, *Numerical
-    Optimization*, 2nd ed., Thm. 17.3), so near a feasible point the weight follows the last multipliers
-    (:meth:`relaxed`). When the iterates stall infeasible it is multiplied by ``factor`` up to its maximum (Nocedal &
-    Wright, Sec. 17.2); it is raised at once when a step shows it too low (:meth:`steered`; docs/engine.md, 'Penalty
-    weight')."""
+    """Weight :math:`\\rho` of the exact :math:`\\ell_1` penalty. With ``unit = "objective"`` the weights are counted in
+    units of the objective's size at the start (the engine passes it: :math:`|f(x_0)|`, or :math:`|c|^T \\sigma` if
+    larger), with ``unit = "absolute"`` as given. The penalty is exact for any weight above the largest multiplier
+    :math:`\\|\\lambda\\|_\\infty` (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Thm. 17.3), so near a feasible
+    point the weight follows the last multipliers (:meth:`relaxed`). When the iterates stall infeasible it is multiplied
+    by ``factor`` up to its maximum (Nocedal & Wright, Sec. 17.2); it is raised at once when a step shows it too low
+    (:meth:`steered`; docs/engine.md, 'Penalty weight')."""
 
     start: float
     maximum: float
@@ -85,24 +84,17 @@ class PenaltyPolicy:
     floor: float = 1e-3
     inactive: float = 1e-6
     retained: float = 0.5
-    """The share of the violation a step's linearization adds, or an accepted step inside its trust region keeps,
-    that shows the weight too low (:meth:`steered`)."""
     persistence: int = 3
-    """Accepted steps in a row inside the trust region that keep the violation before the weight is raised."""
     steering: float = 0.1
-    """The share of the best decrease of the linearized violation in the region below which a step held by the region
-    shows the weight too low (:meth:`short_of_feasibility`)."""
     steering_floor: float = 1e-3
-    """The share of the violation the best step must remove for the comparison to count."""
 
     @classmethod
     def from_settings(cls, s: SCPSettings) -> PenaltyPolicy:
         return cls(s.penalty, s.penalty_max, s.penalty_unit)
 
     def scale(self, objective_size: float) -> float:
-        """The unit of the weights: 1, or the objective's size at the start (at least 1e-12); 1 when that size is
-        zero (a boundary-value problem's zero cost: weights of 1e-11 traded the violation for nothing, and the steps
-        were refused with ratio -1 until the weight had climbed back)."""
+        """The unit of the weights: 1, or the objective's size at the start (at least 1e-12); 1 when that size is zero
+        (a boundary-value problem's zero cost: measured in docs/engine.md, 'Penalty weight')."""
         return 1.0 if self.unit != "objective" or objective_size == 0.0 else max(abs(objective_size), 1e-12)
 
     def initial(self, objective_size: float) -> float:
@@ -113,10 +105,9 @@ class PenaltyPolicy:
         return max(self.over_multipliers * largest_multiplier, self.floor * self.initial(objective_size))
 
     def relaxed(self, rho: float, largest_multiplier: float, objective_size: float) -> float | None:
-        """The weight :meth:`following` the multipliers if ``rho`` is more than :attr:`slack` times it, else None
-        (also when no constraint is active: the largest multiplier below :attr:`inactive` times ``rho``). A softened
-        row whose violation the subproblem kept has its multiplier at the weight, so a weight still needed is never
-        lowered (why, with measurements: docs/engine.md, 'Penalty weight')."""
+        """The weight :meth:`following` the multipliers if ``rho`` is more than :attr:`slack` times it, else None (also
+        when no constraint is active: the largest multiplier below :attr:`inactive` times ``rho``); never a weight still
+        needed (why, with measurements: docs/engine.md, 'Penalty weight')."""
         if largest_multiplier < self.inactive * rho:
             return None
         target = self.following(largest_multiplier, objective_size)
@@ -136,17 +127,16 @@ class PenaltyPolicy:
         programming", Optim. Methods Softw. 23, 2008), and the count of steps in a row that kept the violation. Two
         signs: the step adds more than :attr:`retained` to the iterate's ``violation`` in its ``linearized`` one (the
         step 0 would not), or :attr:`persistence` accepted steps in a row inside the region (``inside``) kept more
-        than :attr:`retained` of it, linearized and at the new point (``violation_new``, None if refused); why,
-        measured: docs/engine.md, 'Penalty weight'."""
+        than :attr:`retained` of it, linearized and at the new point (``violation_new``, None if refused)."""
         keeps = (violation_new is not None and inside and linearized > self.retained * violation
                  and violation_new > self.retained * violation)
         kept = kept + 1 if keeps else 0
         return linearized > (1 + self.retained) * violation or kept >= self.persistence, kept
 
     def short_of_feasibility(self, violation: float, linearized: float, least: float) -> bool:
-        """Whether a step removed less than :attr:`steering` of the linearized ``violation`` that the step removing
-        the most of it in the same trust region removes (to ``least``): the weight, not the region, held it back
-        (Byrd, Nocedal & Waltz 2008, steering rule's first condition; docs/engine.md, 'Penalty weight')."""
+        """Whether a step removed less than :attr:`steering` of the linearized ``violation`` that the step of least
+        violation in the same trust region removes (to ``least``, and at least :attr:`steering_floor` of it): the
+        weight, not the region, held it back (Byrd, Nocedal & Waltz 2008, steering rule's first condition)."""
         return violation - least > self.steering_floor * violation and \
             violation - linearized < self.steering * (violation - least)
 
@@ -241,8 +231,7 @@ class SecondOrderCorrection:
 
     def wanted(self, ratio: float, ev: Evaluation, trial: Evaluation) -> bool:
         """Whether to correct a step from the point of ``ev`` whose trial point evaluated to ``trial``: not when a
-        constraint there is not a number (the trial left the maps' domain; shifted by it, the subproblem would be
-        too)."""
+        constraint there is not a number (the trial left the maps' domain, and the shifted subproblem would too)."""
         wanted = self.enabled and ratio < self.threshold and bool(ev.equalities or ev.inequalities)
         return wanted and all(np.all(np.isfinite(block.values)) for block in (*trial.equalities, *trial.inequalities))
 

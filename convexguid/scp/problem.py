@@ -109,11 +109,10 @@ class LinearConstraints:
         return replace(self, A=A, G=G)
 
     def in_unit_rows(self, scale: np.ndarray, within: float = 0.0) -> tuple[LinearConstraints, np.ndarray, np.ndarray]:
-        """The same constraints (COO, as :meth:`sparse`) with each row divided by its norm in the scaled variables
-        (the rows of :math:`A S` and :math:`G S`), except a row whose norm is within a factor ``within`` of 1; and the
-        factors the rows of ``A`` and of ``G`` were multiplied by. A bound on a position scaled by two Earth radii is
-        a row of 1.3e7 in the scaled step beside the links' ones, and the interior-point solvers then stopped short
-        (the Delta III launch)."""
+        """The same constraints (COO, as :meth:`sparse`) with each row divided by its norm in the scaled variables (the
+        rows of :math:`A S` and :math:`G S`), except a row whose norm is within a factor ``within`` of 1; and the
+        factors the rows of ``A`` and of ``G`` were multiplied by (why: the Delta III launch, docs/engine.md,
+        'Restoration and phase 1')."""
         stated = self.sparse()
 
         def unit(M: sp.coo_matrix) -> np.ndarray:
@@ -161,8 +160,7 @@ class OutputConstraints:
 
     @cached_property
     def transposed(self) -> sp.csr_matrix:
-        """:math:`M^T` as CSR, made once: the multipliers' weight on the residuals, :math:`M^T \\nu`, is asked for at
-        every iteration, and a transposed view made each time cost more than the product."""
+        """:math:`M^T` as CSR, made once for :math:`M^T \\nu` at every iteration (a view made each time cost more)."""
         return sp.csr_matrix(self.M.T)
 
     def gap(self, residuals: np.ndarray) -> np.ndarray:
@@ -205,8 +203,7 @@ class NonconvexProgram(Protocol):
     ``G`` of :meth:`linear_constraints` may be dense or ``scipy.sparse``. ``affine``: every nonlinear map is in fact
     affine (the first step takes the widest trust region). ``guarded_bounds() -> (lower, upper)``: bounds beyond which
     the maps lose their meaning (:meth:`~convexguid.scp.policies.TrustRegionPolicy.box`). ``with_jacobians(x, values)``:
-    ``evaluate(x)`` made from ``values = evaluate(x, jacobians=False)`` (:mod:`convexguid.scp.evaluations`).
-    """
+    ``evaluate(x)`` made from ``values = evaluate(x, jacobians=False)`` (:mod:`convexguid.scp.evaluations`)."""
 
     num_variables: int
 
@@ -219,20 +216,18 @@ class NonconvexProgram(Protocol):
 
     def variable_scale(self) -> np.ndarray:
         """Typical magnitude of each variable; the trust region is a box in scaled units."""
-        ...
 
 
 @dataclass
 class SCPSettings:
-    """Settings of the SCP loop (see :func:`convexguid.scp.engine.solve_scp`). ``tolerance`` bounds the scaled step
-    and the relative predicted decrease at convergence; ``feasibility_tolerance`` the worst nonlinear-constraint
-    violation (in each block's own unit). ``penalty`` and ``penalty_max`` are counted in ``penalty_unit``,
-    ``"absolute"`` or ``"objective"`` (:class:`~convexguid.scp.policies.PenaltyPolicy`). ``max_backend_failures``
-    numerical failures of the convex solver in a row are retried with a smaller trust region. ``iterative_refinement``
-    refines the interior-point backend's KKT solves (Clarabel's default). ``second_order`` enables the end game
-    (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance`` bounds the relative stationarity and complementarity at
-    convergence (:mod:`convexguid.scp.optimality`); ``funnel`` lets a funnel take steps the merit refuses
-    (:class:`~convexguid.scp.policies.FunnelPolicy`)."""
+    """Settings of the SCP loop. ``tolerance`` bounds the scaled step and the relative predicted decrease at
+    convergence; ``feasibility_tolerance`` the worst nonlinear-constraint violation (in each block's own unit).
+    ``penalty`` and ``penalty_max`` are counted in ``penalty_unit``, ``"absolute"`` or ``"objective"``
+    (:class:`~convexguid.scp.policies.PenaltyPolicy`). ``max_backend_failures`` backend failures in a row are retried
+    with a smaller trust region. ``iterative_refinement`` refines the interior-point backend's KKT solves (Clarabel's
+    default). ``second_order`` enables the end game (:mod:`convexguid.scp.lagrangian`); ``kkt_tolerance`` bounds the
+    relative stationarity and complementarity at convergence (:mod:`convexguid.scp.optimality`); ``funnel`` lets a
+    funnel take steps the merit refuses (:class:`~convexguid.scp.policies.FunnelPolicy`)."""
 
     backend: str = "auto"
     max_iterations: int = 50

@@ -58,10 +58,8 @@ def restore_start(program: NonconvexProgram, x0: np.ndarray, tolerance: float = 
     :math:`\\min \\tfrac12 \\|v\\|^2` s.t. :math:`A(x_0 + S v) = b,\\ G(x_0 + S v) \\le h` with :math:`S` the variable
     scale (by least squares when there are only equalities); if that has no solution, the elastic LP
     :math:`\\min 1^T(p + n + s)` s.t. :math:`A S v + p - n = b - A x_0,\\ G S v - s \\le h - G x_0`,
-    :math:`p, n, s \\ge 0` gives the least total violation, which is the certificate when above
-    :data:`INCONSISTENT`. Each row is divided by its norm first: a bound on a position scaled by two Earth radii
-    (an entry of 1.3e7 beside the links' ones) stopped Clarabel short of the projection, and an elastic violation of
-    1e-11 was then reported as a certificate (the Delta III launch as PSOPT states it, which is feasible)."""
+    :math:`p, n, s \\ge 0` gives the least total violation, which is the certificate when above :data:`INCONSISTENT`.
+    Each row is divided by its norm first (the Delta III launch: docs/engine.md, 'Restoration and phase 1')."""
     lin = program.linear_constraints()
     if linear_violation(lin, x0) <= tolerance:
         return Restoration(x0)
@@ -106,9 +104,8 @@ def _least_violation(A: sp.csc_matrix, rhs: np.ndarray, n_a: int, n_g: int) -> t
 
 
 def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
-    """At the largest penalty and still infeasible: minimise the violation alone from ``state`` (a phase-1 run of the
-    same engine, the objective dropped). A feasible point found so restarts the main loop from it; a phase-1 stall
-    with the violation positive is the certificate of infeasibility: local, or global when every map is affine."""
+    """At the largest penalty and still infeasible: phase 1 from ``state`` (see the module docstring). A feasible point
+    found so restarts the main loop from it; the certificate is global when every map is affine."""
     if state.phase1_runs >= MAX_PHASE1_RUNS:
         # no certificate (each phase 1 found a feasible point) and no iteration limit reached: not a plan
         state.finish("unverified", f"iterates stalled with constraints violated after {MAX_PHASE1_RUNS} phase-1 "
@@ -136,9 +133,8 @@ def run_phase1(algo: SCPAlgorithm, state: IterationState) -> None:
         state.kkt, state.merit = None, algo.merit(state.ev, state.x, state.penalty)
         state.radius = algo.trust_region.initial
         if state.funnel is not None:
-            # a funnel as wide as the start's would let the next step throw the restored feasibility away (the
-            # isoperimetric problem left it three times for the violation 0.34 it started from): it starts afresh,
-            # as a warm start's, at the restored point
+            # a funnel as wide as the start's would let the next step throw the restored feasibility away: it starts
+            # afresh, as a warm start's, at the restored point (measured: docs/engine.md, 'Restoration and phase 1')
             state.funnel = algo.funnel.initial(max(penalty_sum(state.ev), algo.settings.feasibility_tolerance),
                                                warm=True)
     else:

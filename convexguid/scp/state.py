@@ -35,9 +35,8 @@ class IterationRecord:
 
 @dataclass
 class IterationState:
-    """The state of one SCP run between two steps: ``raw`` is the program's own evaluation at ``x`` (with
-    Jacobians), ``ev`` adds the output constraints' values (every constraint the merit function penalizes, in one
-    place); ``status`` stays ``None`` while the run goes on."""
+    """The state of one SCP run between two steps: ``raw`` is the program's own evaluation at ``x`` (with Jacobians),
+    ``ev`` the merit's (see ``SCPAlgorithm._evaluate``); ``status`` stays ``None`` while the run goes on."""
 
     x: np.ndarray
     raw: Evaluation
