@@ -42,6 +42,26 @@ def test_a_classic_reaches_its_published_figure_in_at_most_twice_ipopts_iteratio
     assert solution.iterations <= 2 * answer.iterations
 
 
+def test_newtons_well_predicted_steps_keep_their_length_while_the_first_order_region_shrinks():
+    """Betts' space station (Sec. 6.11, 50 intervals): after each well-predicted Newton step cut by the trust region,
+    the first-order steps between Newton's turns were refused and shrank the region, and Newton's next step was cut to
+    it again: 24 Newton steps in a row, each predicted to the digit and each shorter than the one before (211
+    iterations). Now a cut step that is predicted well earns Newton its whole length (107)."""
+    module = _module("space_station")
+    solution = module.build().solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    final = {n: float(solution.nodes.columns[n][-1]) for n in solution.figures.states}
+    assert published_figure(module, final, solution.figures.final_time_s) == pytest.approx(module.PUBLISHED, rel=1e-3)
+    newton = [r for r in solution.history if r.solver_status == "newton" and r.accepted]
+    shrinking = run = 0
+    for before, after in zip(newton, newton[1:], strict=False):
+        well = min(before.ratio, after.ratio) >= 0.99
+        run = run + 1 if well and after.step < before.step else 0
+        shrinking = max(shrinking, run)
+    assert shrinking <= 5
+    assert solution.iterations <= 150
+
+
 def test_the_hang_glider_reaches_cops_range_from_its_flown_first_guess():
     """COPS' hang glider from the default first guess, its range flown by its speed (convexguid.ocp.guess): converged
     and verified at the published range, in at most twice IPOPT's SCP iterations (33 against IPOPT's 44, 21 when its

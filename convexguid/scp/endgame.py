@@ -14,8 +14,9 @@ docs/engine.md, 'Newton end game').
 In an SCP iteration the step is made safe: within ``second_order_violation`` of feasibility, :func:`newton_candidate`
 proposes it only once two subproblems in a row agree on the working set; on the hard equalities and within the hard
 inequalities (a bound it breaks joins the working set, twice at most, else no step); inside a trust region of its own (a
-quarter of a step that failed, doubled by a good cut one, freed by a good whole one) and the first-order one (which a
-good cut one opens to the whole step's length); judged by the merit's ratio test or else the funnel
+quarter of a step that failed, doubled by a good cut one, freed by a good whole one) and the larger of the first-order
+one and the whole length of the last good cut step (which opens the first-order one too); judged by the merit's ratio
+test or else the funnel
 (:meth:`~convexguid.scp.engine.SCPAlgorithm.judged`), with the weight at most the one that follows the multipliers
 (:meth:`~convexguid.scp.policies.PenaltyPolicy.judging`; Nocedal & Wright, *Numerical Optimization*, 2nd ed., Sec.
 18.3); with a least-norm second-order correction when its ratio is poor (the Maratos effect). A regularized step (the
@@ -259,7 +260,7 @@ def newton_candidate(algo: SCPAlgorithm, state: IterationState) -> Candidate | N
     if newton.step is None:  # a bound outside the working set stops the step: it is not settled
         return None
     length = float(np.max(np.abs(newton.step), initial=0.0))
-    radius = min(state.radius, state.newton_radius)
+    radius = min(max(state.radius, state.newton_earned), state.newton_radius)
     whole = length <= radius and not newton.shift
     if length > radius:
         newton = replace(newton, step=newton.step * (radius / length))

@@ -265,7 +265,7 @@ class SCPAlgorithm:
             state.pinned = state.pinned + 1 if held else 0
         if newton is not None:
             if not newton.accepted:
-                state.newton_radius = 0.25 * newton.step
+                state.newton_radius, state.newton_earned = 0.25 * newton.step, 0.0
             elif (newton.ratio >= self.trust_region.expand or trial.ratio < self.settings.accept_ratio
                   or newton.merit <= self.merit(trial.ev, trial.x, newton.penalty)):
                 # the quadratic model predicted its merit well, or it does at least as well as the first-order point
@@ -407,7 +407,8 @@ class SCPAlgorithm:
         state.radius = self.trust_region.update(state.radius, newton.ratio, newton.step)
         if not newton.whole and newton.ratio >= self.trust_region.expand:
             # a well-predicted cut step: room for the whole step next time, which the ratio test then judges
-            state.radius = max(state.radius, min(newton.length, self.trust_region.maximum))
+            state.newton_earned = min(newton.length, self.trust_region.maximum)
+            state.radius = max(state.radius, state.newton_earned)
         self.record(state, newton.step, newton.ratio, True, replace(result, status="newton"))
         if kkt_met(self, state):
             finish_optimal(self, state)

@@ -54,6 +54,9 @@ class IterationState:
     funnel: Funnel | None = None
     """The funnel on the violation (:class:`~convexguid.scp.policies.FunnelPolicy`), None without one."""
     newton_radius: float = np.inf
+    newton_earned: float = 0.0
+    """The whole length of the last Newton step cut and predicted well: Newton's until one of its steps fails, however
+    the refused first-order steps between shrink their own region (docs/engine.md, 'Newton end game')."""
     working_set: WorkingSet | None = None
     escapes: int = 0
     polish: int = 0
