@@ -677,3 +677,22 @@ def test_a_boundary_value_problem_stated_with_a_zero_cost_converges(zero_cost):
     sol = p.solve(max_iterations=100)
     assert sol.status == "converged", sol.message
     assert sol.nodes.columns["u3"][0] == pytest.approx(10.0367718, rel=1e-4)
+
+
+@pytest.mark.parametrize(("method", "where"), [("hermite-simpson", "across interval"), ("chebyshev", "at node")])
+def test_a_run_that_ends_with_its_defects_open_names_the_state_and_the_interval(method, where):
+    """Rao and Mease's hypersensitive problem over tf = 1000 on 10 intervals, stopped after 3 iterations: the message
+    names the worst dynamics defect by its state and interval (node, for a pseudospectral grid), which says where
+    the grid is too coarse, not only how far the defects are from closed."""
+    p = Problem("hypersensitive")
+    x = p.state("x", initial=1.0, final=1.5)
+    u = p.control("u")
+    p.dynamics({x: -x**3 + u})
+    p.final_time(fixed=1000.0)
+    p.minimize_integral(0.5 * (x**2 + u**2))
+    p.transcription(10, method=method)
+    solution = p.solve(max_iterations=3)
+    assert solution.status == "max_iterations"
+    named = re.search(rf"dynamics_defects by [^;]*\(worst: x {where} (\d+)\)", solution.message)
+    assert named, solution.message
+    assert 0 <= int(named.group(1)) <= 10

@@ -265,7 +265,10 @@ class Transcription:
                     self.cone_rows.append((kind, k, j))
                     cones.append(cone_maps[j](state, control))
 
-        defect = ca.vertcat(*self.intervals(Symbols(z, X, V, tf, tf / N), imposed))
+        pieces = self.intervals(Symbols(z, X, V, tf, tf / N), imposed)  # one per interval (per node: pseudospectral)
+        defect = ca.vertcat(*pieces)
+        across = "at node" if len(pieces) == N + 1 else "across interval"
+        self.defect_labels = tuple(f"{v.name} {across} {k}" for k in range(len(pieces)) for v in p.states)
         where = {"node": "at node", "mid": "at the midpoint of interval"}
         self.path_labels = tuple(f"{p.constraints[j].name} {where.get(kind, 'between the nodes of interval')} {k}"
                                  for kind, k, j in self.path_rows)
@@ -435,7 +438,8 @@ class Transcription:
             residuals = select @ z
             residual_jacobian = select if jacobians else None
         equalities = (ConstraintBlock("dynamics_defects", np.asarray(defect, dtype=float).ravel(),
-                                      self._defect_pattern.coo(defect_jac) if jacobians else None, "scaled state"),)
+                                      self._defect_pattern.coo(defect_jac) if jacobians else None, "scaled state",
+                                      self.defect_labels),)
         if self.equality_rows:
             value, jacobian = self._path_equalities(z)
             equalities += (ConstraintBlock("path_equalities", np.asarray(value, dtype=float).ravel(),
