@@ -108,8 +108,8 @@ class SCPAlgorithm:
         self.scale = program.variable_scale()
         self.evaluations = ProgramEvaluations(program)
         self.guarded = program.guarded_bounds() if hasattr(program, "guarded_bounds") else None
-        model = program.curvature_model() if hasattr(program, "curvature_model") else None
-        self.curvature: CurvatureModel | None = model  # None: affine constraints
+        self.curvature: CurvatureModel | None = (program.curvature_model() if hasattr(program, "curvature_model")
+                                                 else None)  # None: affine constraints
         self.second_order: SecondOrderModels | None = None
         self.curved: CurvedSubproblem | None = None
         self.assembler: SubproblemAssembler | CondensedAssembler | None = None

@@ -41,13 +41,9 @@ def figure(final_state: dict[str, float], final_time: float) -> float:
     return final_state["cost"]
 
 
-def cross_matrix(v: ca.SX) -> ca.SX:
-    return ca.vertcat(ca.horzcat(0, -v[2], v[1]), ca.horzcat(v[2], 0, -v[0]), ca.horzcat(-v[1], v[0], 0))
-
-
 def rates(w: ca.SX, r: ca.SX, h: ca.SX, u: ca.SX) -> tuple[ca.SX, ca.SX]:
     """The body rate's and the attitude's derivatives."""
-    inertia, rx = ca.DM(INERTIA), cross_matrix(r)
+    inertia, rx = ca.DM(INERTIA), ca.skew(r)
     attitude = ca.DM.eye(3) + 2 / (1 + ca.dot(r, r)) * (rx @ rx - rx)
     c3 = attitude[:, 2]
     gravity_gradient = 3 * ORBITAL_RATE**2 * ca.cross(c3, inertia @ c3)
