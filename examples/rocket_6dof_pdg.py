@@ -25,7 +25,7 @@ with T_min = 1.5. The quaternion's unit norm is no constraint, in OpenSCvx or he
 the quadratic form the file writes (|q|^2 times a rotation). No published optimum: the reference is IPOPT on the
 same transcription (convexguid.ocp.reference.solve_with_ipopt). On the default grid the SCP converges (KKT
 conditions met) and is verified after one repair round (the body rate held between nodes): final mass 1.603025,
-150 iterations, against IPOPT's 1.603065 on the unrepaired transcription, whose optimum breaks the rate limit
+131 iterations, against IPOPT's 1.603065 on the unrepaired transcription, whose optimum breaks the rate limit
 between nodes.
 Run: python examples/rocket_6dof_pdg.py
 """

@@ -167,16 +167,16 @@ def test_the_nonconvex_descent_converges_with_its_cones_in_the_curved_step():
     assert solution.objective == pytest.approx(reference.objective, rel=1e-7)
 
 
-def test_least_squares_multipliers_give_a_cone_on_its_boundary_its_dual():
-    """At the circle program's optimum the distance cone holds with equality: its least-squares dual is
+def test_fitted_multipliers_give_a_cone_on_its_boundary_its_dual():
+    """At the circle program's optimum the distance cone holds with equality: its fitted dual is
     mu (1, -v1/|v1|) with mu = 1 (the objective's weight on t), and those multipliers prove the point a KKT point."""
     from convexguid.scp.engine import SCPAlgorithm
-    from convexguid.scp.optimality import kkt_met, least_squares_multipliers, measure_kkt
+    from convexguid.scp.optimality import fitted_multipliers, kkt_met, measure_kkt
 
     program = _NearestOnCircle()
     algo = SCPAlgorithm(program, SCPSettings())
     state = algo.initialize(np.array([4.0, 0.6, 0.8]))
-    state.multipliers = least_squares_multipliers(algo, state)
+    state.multipliers = fitted_multipliers(algo, state)
     cone = program.evaluate(state.x).cones[0].values
     assert state.multipliers.cone == pytest.approx(np.concatenate([[1.0], -cone[1:] / np.linalg.norm(cone[1:])]))
     measure_kkt(algo, state)

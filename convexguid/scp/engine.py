@@ -43,7 +43,7 @@ from convexguid.scp.evaluations import ProgramEvaluations, not_finite
 from convexguid.scp.lagrangian import MAX_DENSE_SIZE, has_jacobian
 from convexguid.scp.merit import decrease_ratio, describe_violations, max_violation, penalty_sum, violation_by_block
 from convexguid.scp.optimality import (
-    certified_by_least_squares,
+    certified_by_fitted_multipliers,
     certified_here,
     finish_optimal,
     kkt_met,
@@ -286,7 +286,7 @@ class SCPAlgorithm:
             state.finish("converged", "feasibility restored")
         elif accepted and kkt_met(self, state):
             finish_optimal(self, state)
-        elif accepted and curved is not None and certified_by_least_squares(self, state):
+        elif accepted and curved is not None and certified_by_fitted_multipliers(self, state):
             pass  # the curved subproblem's own multipliers carry its augmentation (:mod:`convexguid.scp.curved`)
         elif self._small(state, step, predicted):
             self._stalled(state)
@@ -429,8 +429,8 @@ class SCPAlgorithm:
                 state.finish("unverified", f"{why}; not proved optimal: the backend reported no multipliers")
             elif state.kkt is None or kkt_met(self, state):
                 finish_optimal(self, state)
-            elif certified_by_least_squares(self, state):
-                pass  # finished: the least-squares multipliers make it a KKT point
+            elif certified_by_fitted_multipliers(self, state):
+                pass  # finished: the fitted multipliers make it a KKT point
             elif self.second_order is not None and state.polish < POLISH_ITERATIONS:
                 # a small step is not yet proof of optimality: polish on (the curved subproblem); a trust
                 # region that collapsed on ratios of round-off-sized decreases opens again
