@@ -33,6 +33,16 @@ class ConstraintCheck:
     worst: float
     bound: float
     sense: str
+    held: bool | None = None
+    """Whether it held as its checker judged it, within a tolerance and perhaps net of the flight's final miss (None:
+    the checker does not say, and any violation counts)."""
+
+    @property
+    def failed(self) -> bool:
+        """It broke its bound as judged (where the checker does not judge: by more than round-off)."""
+        if self.held is not None:
+            return not self.held
+        return self.violation > 1e-9 * max(1.0, abs(self.bound))
 
     @property
     def violation(self) -> float:

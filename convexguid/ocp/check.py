@@ -34,7 +34,7 @@ from convexguid.ocp.mesh import (
     state_names,
 )
 from convexguid.ocp.parts import Margins, NumericFunction
-from convexguid.ocp.pinned import broken_beside_end, net_of_final_miss, netted_bounds, with_rate_conditions
+from convexguid.ocp.pinned import broken_beside_end, net_of_final_miss, netted_remarks, with_rate_conditions
 from convexguid.ocp.transcription import Transcription
 from convexguid.scp.check_repair import Check, Repair, grown_margin
 from convexguid.verification import ConstraintCheck, Verification
@@ -172,15 +172,18 @@ class DenseChecker:
         p = program.problem
         track, flight = self.flown(program, z)
         stated = self._stated_excess(program, track)
-        excess = net_of_final_miss(program, track.t, track.x, stated)
-        broken = any(np.any(e > self._tolerance(p, key)) for key, e in excess.items())
-        checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()), 0.0, "max")
+        excess = net_of_final_miss(program, track, stated)
+        held = {key: not np.any(e > self._tolerance(p, key)) for key, e in excess.items()}
+        broken = not all(held.values())
+        checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()), 0.0, "max", held[("path", j)])
                   for j, c in enumerate(p.constraints) if c.judged]
         for i, v in enumerate(p.states):
             if v.upper is not None:
-                checks.append(ConstraintCheck(f"{v.name}_max", float(track.x[:, i].max()), v.upper, "max"))
+                checks.append(ConstraintCheck(f"{v.name}_max", float(track.x[:, i].max()), v.upper, "max",
+                                              held[("bound", (i, True))]))
             if v.lower is not None:
-                checks.append(ConstraintCheck(f"{v.name}_min", float(track.x[:, i].min()), v.lower, "min"))
+                checks.append(ConstraintCheck(f"{v.name}_min", float(track.x[:, i].min()), v.lower, "min",
+                                              held[("bound", (i, False))]))
         final_errors = self._final_errors(program, track, program.states(z)[-1])
         worst_final = max(final_errors.values(), default=0.0)
         passed = worst_final <= FINAL_TOLERANCE and not broken
@@ -190,7 +193,7 @@ class DenseChecker:
             checks.append(ConstraintCheck("local_error", local, p.mesh_tolerance, "max"))
             tolerances["local_error"] = p.mesh_tolerance
             passed = passed and local <= p.mesh_tolerance
-        remarks = flight + netted_bounds(program, stated, excess, PATH_TOLERANCE)
+        remarks = flight + netted_remarks(program, stated, excess, PATH_TOLERANCE)
         verification = Verification(track.t.size, tuple(checks), worst_final, final_errors, passed, tolerances,
                                     remarks + (() if passed else jumping_controls(program, z)))
         return Check(verification, track)
@@ -332,9 +335,9 @@ class DenseChecker:
 
     @staticmethod
     def _excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:
-        """:meth:`_stated_excess`, with a bound a state is stated on at the final end judged on the last interval
-        net of the flight's miss of that final value (:func:`~convexguid.ocp.pinned.net_of_final_miss`)."""
-        return net_of_final_miss(program, track.t, track.x, DenseChecker._stated_excess(program, track))
+        """:meth:`_stated_excess`, judged on the last interval net of the flight's miss of the stated final values
+        where the plan ends on a bound or a path constraint (:func:`~convexguid.ocp.pinned.net_of_final_miss`)."""
+        return net_of_final_miss(program, track, DenseChecker._stated_excess(program, track))
 
     @staticmethod
     def _stated_excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:

@@ -16,7 +16,7 @@ drift is theirs.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import casadi as ca
@@ -37,7 +37,7 @@ from convexguid.scp.problem import (
     LinearConstraints,
     OutputConstraints,
 )
-from convexguid.verification import ConstraintCheck, Verification
+from convexguid.verification import Verification
 
 
 @dataclass(frozen=True)
@@ -311,7 +311,7 @@ class PhasedChecker:
                         for key, value in c.verification.final_errors.items()}
         for label, error in zip(program.link_names, errors, strict=True):
             final_errors[f"link_{label}_error"] = max(final_errors.get(f"link_{label}_error", 0.0), float(error))
-        constraint_checks = tuple(ConstraintCheck(f"{name}.{k.name}", k.worst, k.bound, k.sense)
+        constraint_checks = tuple(replace(k, name=f"{name}.{k.name}")
                                   for name, c in named for k in c.verification.checks)
         passed = all(c.verification.passed for c in checks) and float(errors.max(initial=0.0)) <= FINAL_TOLERANCE
         verification = Verification(sum(c.verification.grid_points for c in checks), constraint_checks,

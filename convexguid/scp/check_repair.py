@@ -102,10 +102,10 @@ class VerifiedSolve:
 
 
 def worst_violations(verification: Verification, count: int = 3) -> str:
-    """The largest violations of a dense check (``"name worst > bound (by excess)"``: six digits of the worst value
-    alone hid an excess of 1e-7 on a bound of -0.4), then the largest final-state errors (every state's is judged)."""
-    broken = sorted((c for c in verification.checks if c.violation > 1e-9 * max(1.0, abs(c.bound))),
-                    key=lambda c: -c.violation)[:count]
+    """The largest violations of a dense check among the constraints that failed it (``"name worst > bound (by
+    excess)"``: six digits of the worst value alone hid an excess of 1e-7 on a bound of -0.4), then the largest
+    final-state errors (every state's is judged)."""
+    broken = sorted((c for c in verification.checks if c.failed), key=lambda c: -c.violation)[:count]
     parts = [f"{c.name} {c.worst:.6g} {'>' if c.sense == 'max' else '<'} {c.bound:g} (by {c.violation:.2g})"
              for c in broken]
     parts += [f"{k} {v:.3g}" for k, v in sorted(verification.final_errors.items(), key=lambda kv: -kv[1])[:count]]
