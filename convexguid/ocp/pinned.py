@@ -26,12 +26,16 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from convexguid.ocp.declarations import PathConstraint
 from convexguid.ocp.parts import Margins, NumericFunction
 from convexguid.ocp.transcription import Transcription
+
+if TYPE_CHECKING:  # the dense check imports this module
+    from convexguid.ocp.check import DenseTrack
 
 
 @dataclass(frozen=True)
@@ -64,7 +68,13 @@ def end_samples(program: Transcription, t: np.ndarray, final: bool) -> np.ndarra
     return t >= t[-1] * shares[-2] if final else t <= t[-1] * shares[1]
 
 
-def net_of_final_miss(program: Transcription, track, excess: dict[tuple, np.ndarray]) -> dict[tuple, np.ndarray]:
+SITS_ON = 1e-6
+"""A path inequality within this of its bound (its own unit) at the flight's end, moved onto the stated final values,
+sits on it there (the dense check's path tolerance)."""
+
+
+def net_of_final_miss(program: Transcription, track: DenseTrack,
+                      excess: dict[tuple, np.ndarray]) -> dict[tuple, np.ndarray]:
     """``excess`` (by key ``("bound", (state, upper))`` and ``("path", j)``) judged on the last interval net of the
     flight's miss of the stated final values (``track.x[-1]`` against them): each bound a state is pinned on at the
     final end by that state's miss, and each judged path inequality the flight's end moved onto the stated values
@@ -86,11 +96,6 @@ def net_of_final_miss(program: Transcription, track, excess: dict[tuple, np.ndar
         if c.judged and not c.equality and aimed[j] >= -SITS_ON and flown[j] > aimed[j]:
             out[("path", j)] = np.where(last, out[("path", j)] - (flown[j] - aimed[j]), out[("path", j)])
     return out
-
-
-SITS_ON = 1e-6
-"""A path inequality within this of its bound (its own unit) at the flight's end, moved onto the stated final values,
-sits on it there (the dense check's path tolerance)."""
 
 
 def broken_beside_end(program: Transcription, t: np.ndarray, excess: dict[tuple, np.ndarray],
