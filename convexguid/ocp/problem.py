@@ -151,7 +151,9 @@ class Problem:
             return
         low, high = number(f"{where}: bounds", bounds[0], allow_none=False), number(f"{where}: bounds", bounds[1])
         if not 0 < low < (math.inf if high is None else high):
-            raise SpecError(f"{where}: bounds: expected 0 < lower < upper (got ({low:g}, {high}))")
+            raise SpecError(f"{where}: bounds: expected 0 < lower < upper (got ({low:g}, {high})): the final time "
+                            "scales the dynamics, so its lower bound is a positive duration (a small share of the "
+                            "guess where the source says 0)")
         if high is None and guess is None:
             raise SpecError(f"{where}: guess: needed when the final time has no upper bound")
         self.tf_bounds = (low, math.inf if high is None else high)
