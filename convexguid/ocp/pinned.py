@@ -135,11 +135,11 @@ def netted_remarks(program: Transcription, stated: dict[tuple, np.ndarray], net:
         if key in net and np.max(stated[key]) > tolerance >= np.max(net[key]):
             if key[0] == "bound":
                 v = program.problem.states[key[1][0]]
-                what = (f"{v.name}_{'max' if key[1][1] else 'min'}", f"the final {v.name}",
-                        f"where {v.name} is stated on that bound")
+                name, missed, why = (f"{v.name}_{'max' if key[1][1] else 'min'}", f"the final {v.name}",
+                                     f"where {v.name} is stated on that bound")
             else:
-                what = (program.problem.constraints[key[1]].name, "the stated final values",
-                        "where the plan ends on it")
-            remarks.append(f"{what[0]} judged on the last interval net of the flight's miss of {what[1]} (within the "
-                           f"final-state tolerance), {what[2]}: the flight breaks it by {np.max(stated[key]):.3g}")
+                name, missed, why = (program.problem.constraints[key[1]].name, "the stated final values",
+                                     "where the plan ends on it")
+            remarks.append(f"{name} judged on the last interval net of the flight's miss of {missed} (within the "
+                           f"final-state tolerance), {why}: the flight breaks it by {np.max(stated[key]):.3g}")
     return tuple(remarks)
