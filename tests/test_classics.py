@@ -1,7 +1,7 @@
 """Published problems stated from their papers (examples/classics/), solved from a straight-line guess with default
 settings, against the published figure and against IPOPT on the same transcription from the same guess; and the
-statements and rules they rely on (nonlinear boundary constraints, periodic controls, estimated scales, the funnel,
-honest statuses after a repair)."""
+statements and rules they rely on (nonlinear boundary constraints, periodic controls, estimated scales, honest
+statuses after a repair; the funnel's rules: tests/test_funnel.py)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from convexguid.ocp import Phases, Problem
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
 from convexguid.scp.check_repair import Check, Repair, solve_verified
-from convexguid.scp.policies import Funnel, FunnelPolicy, PenaltyPolicy, TrustRegionPolicy
+from convexguid.scp.policies import PenaltyPolicy, TrustRegionPolicy
 from convexguid.scp.problem import Evaluation, LinearConstraints, OutputConstraints, SCPSettings
 from convexguid.verification import Verification
 
@@ -213,55 +213,6 @@ def test_a_state_of_unstated_size_is_scaled_by_what_its_rate_can_do():
     guessed 1 s; y4 at 100 sin(u) across the angle's range."""
     program = transcribe(_module("particle_steering").build())
     assert program.state_scales == pytest.approx([45.0, 5.0, 45.0, 100.0], rel=1e-9)
-
-
-def test_the_funnel_takes_an_objective_step_inside_it_and_refuses_one_outside():
-    funnel = FunnelPolicy()
-    # predicted objective decrease 0.1 against a violation of 1e-4 (0.1^2.3 >= 1e-4^1.1): an f-step, the objective
-    # fell as predicted, the violation grew to 1e-2: inside a funnel of width 1, outside one of 1e-3
-    assert funnel.judge(1.0, 1e-4, 1e-2, 0.1, 0.1, 1e-4) == ("f", pytest.approx(1.0))
-    assert funnel.judge(1e-3, 1e-4, 1e-2, 0.1, 0.1, 1e-4)[0] is None
-    assert funnel.judge(1.0, 1e-4, 1e-2, 0.001, 0.1, 1e-4)[0] is None
-    # a large violation: an h-step, judged by the violation's decrease
-    kind, ratio = funnel.judge(10.0, 1.0, 0.5, -0.1, 1e-3, 0.8)
-    assert kind == "h" and ratio == pytest.approx(0.625)
-    assert funnel.narrowed(10.0, 1.0, 0.5) == pytest.approx(5.0)
-
-
-def test_the_funnel_refuses_a_step_back_to_a_point_its_h_step_left():
-    """The merit and the funnel must not take turns between two points (the tumor problem's 280-iteration cycle):
-    the numbers are that cycle's, violation 1.857e-7 <-> 1.084e-7, objective 7571.4192 <-> 7571.434."""
-    policy = FunnelPolicy()
-    funnel = policy.initial(1e-3)
-    low, high, f_low, f_high = 1.084e-7, 1.857e-7, 7571.434, 7571.4192
-    # the merit refuses (ratio -1.1), the funnel takes it as an h-step: the violation fell as predicted
-    accepted, ratio, funnel = policy.decide(funnel, False, -1.1, high, low, f_high, f_high - f_low, 5.5e-5, 1.856e-7)
-    assert accepted and ratio == pytest.approx(0.4165, abs=1e-4) and funnel.left == ((high, f_high),)
-    # the merit would take the step back (its ratio 0.31): it returns to the point left, so it is refused
-    accepted, ratio, after = policy.decide(funnel, True, 0.31, low, high, f_low, f_low - f_high, 2.9e-2, 1.083e-7)
-    assert not accepted and ratio <= 0 and after == funnel
-    # a step that lowers the objective below that point's is taken
-    accepted, ratio, _ = policy.decide(funnel, True, 0.31, low, high, f_low, f_low - (f_high - 0.01), 2.9e-2, 1e-7)
-    assert accepted and ratio == 0.31
-
-
-def test_the_funnel_refuses_a_step_back_to_a_point_a_merit_step_left():
-    """The other way round (Betts' underwater vehicle with one state's scale stated at 0.5, 300 iterations of a
-    2-cycle): the merit takes a step to less violation at a higher objective, and the funnel took the f-step back to
-    where it started, inside its width of 8.86. The point the merit step left is now a filter entry."""
-    policy = FunnelPolicy()
-    funnel = Funnel(8.86)
-    # its model had the objective falling (an f-step to the funnel, which then takes no h-step and keeps its width)
-    accepted, ratio, funnel = policy.decide(funnel, True, 0.878, 2.229, 0.02349, 237.743, 237.743 - 818.285, 10.0,
-                                            2.229)
-    assert accepted and ratio == 0.878 and funnel.left == ((2.229, 237.743),) and funnel.width == 8.86
-    # the merit refuses the step back (ratio -8.31); as an f-step it is inside the width and drops the objective as
-    # predicted, but it returns to the point left
-    accepted, ratio, after = policy.decide(funnel, False, -8.31, 0.02349, 2.229, 818.285, 818.285 - 237.757, 600.0,
-                                           0.02349)
-    assert not accepted and ratio <= 0 and after == funnel
-    # a merit step that lowers the violation and the objective leaves no entry
-    assert policy.decide(Funnel(8.86), True, 0.9, 2.229, 0.02349, 237.743, 1.0, 1.0, 2.229)[2].left == ()
 
 
 def test_the_penalty_is_steered_up_when_the_region_allowed_far_more_feasibility_than_the_step_took():

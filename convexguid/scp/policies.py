@@ -148,10 +148,13 @@ class PenaltyPolicy:
 
 @dataclass(frozen=True)
 class Funnel:
-    """The funnel's state: its width on the violation and the points its h-steps left behind, ``(h, f)`` pairs."""
+    """The funnel's state: its width on the violation, the points its h-steps left behind, ``(h, f)`` pairs, and how
+    many steps in a row were refused only for returning to one of them (``blocked``: the merit or the funnel's own
+    test would have taken each)."""
 
     width: float
     left: tuple[tuple[float, float], ...] = ()
+    blocked: int = 0
 
 
 @dataclass(frozen=True)
@@ -197,14 +200,17 @@ class FunnelPolicy:
         """``(accepted, ratio, funnel)``: a step the merit's ratio test accepts, or else one :meth:`judge` accepts
         (with its ratio), unless it returns to a point an h-step left; and the funnel after it (an accepted h-step
         narrows it; an h-step the merit refused, or any step to less violation at a higher objective, remembers the
-        point it left). A refused step's ratio is at most 0 (the radius shrinks)."""
+        point it left). A refused step's ratio is at most 0 (the radius shrinks); the funnel then says whether only
+        a point left refused it, and how many times in a row (:attr:`Funnel.blocked`)."""
         kind, ratio = self.judge(funnel.width, violation, violation_new, objective_drop, predicted_objective,
                                  predicted_violation)
         # a filter's test: no better in either measure than a point an h-step left (by a margin of its violation)
         objective_new, margin = objective - objective_drop, self.filter_margin
         returns = any(violation_new >= (1 - margin) * h and objective_new >= f - margin * h for h, f in funnel.left)
-        if not (merit_accepts or kind is not None) or returns:
-            return False, min(merit_ratio, 0.0), funnel
+        taken = merit_accepts or kind is not None
+        if not taken or returns:
+            return False, min(merit_ratio, 0.0), replace(funnel, blocked=funnel.blocked + 1 if taken else 0)
+        funnel = replace(funnel, blocked=0)
         if violation_new < violation:
             # a point left for less violation at a higher objective is not to be come back to, whatever accepted the
             # step: an f-step back to one a merit step had left made a pair of steps cycle (docs/engine.md, 'Funnel')
