@@ -108,7 +108,8 @@ def test_an_iterate_held_by_a_point_the_funnel_left_restores_feasibility_instead
     violation of 1e-2; every step back towards feasibility then raised the objective above a point the funnel had
     left, and was refused for it. Before, the engine read the stalls as a penalty too low: it raised the weight ten
     times from 2.4e4 to 2.4e9 over 100 iterations before phase 1 restored feasibility, and converged after 233
-    iterations (IPOPT: 27). Now the second such refusal in a row restores feasibility at once (62 iterations)."""
+    iterations (IPOPT: 27). Now the second such refusal in a row restores feasibility at once (62 iterations to the
+    first plan)."""
     solution = kelly_cart_pole(50).solve()
     assert solution.status == "converged" and solution.verification.passed, solution.message
     start = solution.history[0].penalty

@@ -377,17 +377,18 @@ class Problem:
                             f"{expression.shape})")
         self.objective, self.terminal = "terminal", expression
 
-    def minimize_integral(self, integrand, terminal=0.0, name: str = "cost") -> ca.SX:
+    def minimize_integral(self, integrand, terminal=0.0, name: str = "cost", scale: float | None = None) -> ca.SX:
         """Minimise the integral over the maneuver of ``integrand`` (of states, controls and :attr:`time`: a Lagrange
         cost), plus ``terminal``, a function of the final state and time as in :meth:`minimize_terminal` (a Bolza
         cost). The integral is carried as a state ``name`` that starts at 0 with the integrand as its rate, so every
         transcription integrates it as it integrates the dynamics, the dense check re-propagates it with them, and
-        the tables show it accumulate. Returns its symbol."""
+        the tables show it accumulate; ``scale`` is that state's (default: estimated from the integrand, as any
+        state's). Returns its symbol."""
         where = f"{self.name}: minimize_integral"
         integrand = ca.SX(integrand)
         if integrand.shape != (1, 1):
             raise SpecError(f"{where}: integrand: expected a scalar expression (got shape {integrand.shape})")
-        cost = self.state(name, initial=0.0)
+        cost = self.state(name, initial=0.0, scale=scale)
         self.rates[name] = integrand
         self.minimize_terminal(cost + terminal)
         return cost

@@ -10,7 +10,8 @@ values (``scale_from == "values"``) or 1 (``"none"``), and the rate estimate rep
 
 * for a state with nothing stated: the change its rate can make over the horizon, :math:`t_f \\max |f_i|` over the
   straight-line guess (at five instants) with each control at its guess and across its range in turn (nine values
-  between finite bounds), when that is above 1;
+  between its bounds, a missing bound replaced by the guess less or plus the control's scale: :func:`swept_values`),
+  when that is above 1;
 * for a state whose stated values are all below :data:`NEGLIGIBLE` of what its rate can reach: that reach, the
   same change, except that a rate that pulls the state back (:math:`\\partial f_i / \\partial x_i < 0`) moves it
   only for its relaxation time :math:`1 / |\\partial f_i / \\partial x_i|` when that is shorter than the horizon.
@@ -41,6 +42,7 @@ import casadi as ca
 import numpy as np
 
 if TYPE_CHECKING:  # the problem module imports this one
+    from convexguid.ocp.declarations import Variable
     from convexguid.ocp.problem import Problem
     from convexguid.ocp.transcription import Transcription
 
@@ -59,9 +61,7 @@ def estimated_scales(problem: Problem) -> np.ndarray:
     start, end, guess = problem.straight_line()
     samples = [guess]
     for j, v in enumerate(problem.controls):
-        values = np.linspace(v.lower, v.upper, 9) if v.lower is not None and v.upper is not None else \
-            [b for b in (v.lower, v.upper) if b is not None]
-        samples += [np.where(np.arange(guess.size) == j, value, guess) for value in values]
+        samples += [np.where(np.arange(guess.size) == j, value, guess) for value in swept_values(v, guess[j])]
     x, u, t = problem.state_vector(), problem.control_vector(), problem.time
     rate = ca.Function("rate", [x, u, t], [problem.rate_vector(), ca.diag(ca.jacobian(problem.rate_vector(), x))])
     change, reach = np.zeros(len(problem.states)), np.zeros(len(problem.states))
@@ -82,6 +82,16 @@ def estimated_scales(problem: Problem) -> np.ndarray:
         if problem.states[i].scale_from == "values" and scales[i] < NEGLIGIBLE * reach[i]:
             scales[i] = reach[i]
     return scales
+
+
+def swept_values(control: Variable, guess: float) -> np.ndarray:
+    """Nine values across a control's range for the rate estimate: between its bounds; where a bound is not stated,
+    its guess less (or plus) its scale stands for it. Betts' linear tangent steering states its angle without bounds
+    and guesses 0, where the vertical speed's rate is 0: swept only at its guess, that speed was scaled by 1 and
+    reached 14 (132 SCP iterations, IPOPT 8; with it, 8)."""
+    lower = control.lower if control.lower is not None else guess - control.scale
+    upper = control.upper if control.upper is not None else guess + control.scale
+    return np.linspace(lower, max(upper, lower), 9)
 
 
 FOLLOW_FACTOR = 4.0
