@@ -417,7 +417,7 @@ def test_a_stated_size_is_kept_when_the_rate_only_pulls_the_state_back():
     """Betts' and GPOPS-II's hypersensitive problem: x' = -x^3 + u from 1 to 1.5 over 10000. Its rate on the guess,
     3.4, sustained over the horizon would reach 33750, which replaced the stated 1.5 and made every subproblem fail;
     the rate pulls x back within 1 / |df/dx| = 0.15, so 1.5 stays. The integral of x^2 + u^2, with nothing stated,
-    is still scaled by its rate over the horizon."""
+    is still scaled by its rate over the horizon, the unbounded u swept to its guess 0 plus or minus its scale 1."""
     problem = Problem("hypersensitive")
     x = problem.state("x", initial=1.0, final=1.5)
     u = problem.control("u")
@@ -425,7 +425,7 @@ def test_a_stated_size_is_kept_when_the_rate_only_pulls_the_state_back():
     problem.final_time(fixed=10000.0)
     problem.minimize_integral(0.5 * (x**2 + u**2), name="J")
     x_scale, cost_scale = problem.state_scales()
-    assert x_scale == 1.5 and cost_scale == pytest.approx(10000.0 * 0.5 * 1.5**2)
+    assert x_scale == 1.5 and cost_scale == pytest.approx(10000.0 * 0.5 * (1.5**2 + 1.0**2))
 
 
 def _minimum_time_beside_ipopt(build):
