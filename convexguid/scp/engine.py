@@ -80,8 +80,8 @@ POLISH_ITERATIONS = 40
 
 
 HELD = 2
-"""Steps in a row refused only by a point the funnel left after which feasibility is restored (one may be the trust
-region's: measured in docs/engine.md, 'Funnel')."""
+"""How many steps in a row, each refused only by a point the funnel left, send an infeasible iterate to phase 1 (one
+such refusal may be the trust region's doing: measured in docs/engine.md, 'Funnel')."""
 
 
 class Trial(NamedTuple):
