@@ -79,11 +79,6 @@ POLISH_ITERATIONS = 40
 20 a run along a long flat valley ended so: docs/engine.md, 'KKT certificates and the polish')."""
 
 
-HELD = 2
-"""How many steps in a row, each refused only by a point the funnel left, send an infeasible iterate to phase 1 (one
-such refusal may be the trust region's doing: measured in docs/engine.md, 'Funnel')."""
-
-
 class Trial(NamedTuple):
     """A trial point: ``raw`` the program's evaluation there, ``ev`` the merit's (see ``SCPAlgorithm._evaluate``)."""
 
@@ -293,8 +288,8 @@ class SCPAlgorithm:
             finish_optimal(self, state)
         elif accepted and curved is not None and certified_by_fitted_multipliers(self, state):
             pass  # the curved subproblem's own multipliers carry its augmentation (:mod:`convexguid.scp.curved`)
-        elif self._held_by_funnel(state):
-            run_phase1(self, state)
+        elif self.funnel.holds(state.funnel) and max_violation(state.ev) > self.settings.feasibility_tolerance:
+            run_phase1(self, state)  # only less violation passes the point the funnel left: restore feasibility
         elif self._small(state, step, predicted):
             self._stalled(state)
         elif steer:
@@ -338,15 +333,6 @@ class SCPAlgorithm:
                                                            self.choice.backend, like=self.backend)
         return (linearized_violation(state.raw, self.outputs, self.assembler.step(result.x)) if result.usable
                 else penalty_sum(state.ev))
-
-    def _held_by_funnel(self, state: IterationState) -> bool:
-        """Whether, with constraints violated, the last :data:`HELD` steps were each refused only for returning to a
-        point the funnel left (:attr:`~convexguid.scp.policies.Funnel.blocked`; the second at a quarter of the first's
-        radius). Only a step to less violation than that point's is then taken, which a heavier penalty does not
-        make: feasibility is restored (phase 1), as a filter method's restoration phase does (Fletcher & Leyffer,
-        Math. Program. 91, 2002; docs/engine.md, 'Funnel')."""
-        return (not self.phase1 and state.funnel is not None and state.funnel.blocked >= HELD
-                and max_violation(state.ev) > self.settings.feasibility_tolerance)
 
     def _raise_penalty(self, state: IterationState) -> bool:
         """Raise the penalty weight by its factor (False at its maximum); the merit and the radius follow."""

@@ -173,6 +173,7 @@ class FunnelPolicy:
     sufficient: float = 0.1
     narrowing: float = 0.5
     filter_margin: float = 1e-5
+    held: int = 2
 
     def initial(self, violation: float, warm: bool = False) -> Funnel:
         """The funnel at a start of violation ``violation``: :attr:`start_factor` times it, and at least
@@ -189,6 +190,14 @@ class FunnelPolicy:
             return ("f" if violation_new <= width and ratio >= self.sufficient else None), ratio
         ratio = (violation - violation_new) / predicted_violation if predicted_violation > 0 else -1.0
         return ("h" if violation_new <= width and ratio >= self.sufficient else None), ratio
+
+    def holds(self, funnel: Funnel | None) -> bool:
+        """Whether the last :attr:`held` steps were each refused only for returning to a point left (the second at a
+        quarter of the first's radius; one may be the trust region's doing). Only a step to less violation than that
+        point's passes it, which no heavier penalty makes: an infeasible iterate so held is restored to feasibility
+        (phase 1), as a filter method's restoration phase does (Fletcher & Leyffer, Math. Program. 91, 2002;
+        measured: docs/engine.md, 'Funnel')."""
+        return funnel is not None and funnel.blocked >= self.held
 
     def narrowed(self, width: float, violation: float, violation_new: float) -> float:
         """The width after an accepted h-step."""
