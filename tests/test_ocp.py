@@ -30,6 +30,7 @@ from convexguid.errors import SpecError
 from convexguid.ocp import Problem
 from convexguid.ocp.hermite_simpson import HermiteSimpsonProgram
 from convexguid.ocp.reference import solve_with_ipopt
+from convexguid.ocp.scaling import scale_advice
 from convexguid.ocp.solve import transcribe
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -545,6 +546,24 @@ def test_a_run_that_ends_short_names_the_estimated_scales_its_plan_outgrew():
     assert f"the last plan outgrew the scales estimated for v (0.1, reached {reached:.3g}): state sizes with scale=" \
         in estimated.message, estimated.message
     assert "outgrew" not in stated.message, stated.message
+
+
+def test_a_plan_that_ran_away_is_not_advised_as_a_scale_to_state():
+    """A plan a million times beyond a state's scale ran away (Dymos' launch to orbit without a floor on its mass flew
+    through zero mass to 1e73 m): the advice says so, names the state and does not offer its size as a scale."""
+    p = Problem("runaway")
+    x = p.state("x", initial=0.0, final=1.0)
+    u = p.control("u", bounds=(-1.0, 1.0))
+    p.dynamics({x: u})
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(4)
+    program = transcribe(p)
+    z = np.array(program.initial_guess(), dtype=float)
+    advice = scale_advice(program, 1e9 * z)
+    assert advice.startswith("the last plan ran away (x ") and "scale=" not in advice, advice
+    outgrown = scale_advice(program, 10.0 * z)
+    assert outgrown.startswith("the last plan outgrew the scales estimated for x (1, reached 10)"), outgrown
 
 
 def test_a_final_condition_blind_at_the_guess_is_reached_off_a_saddle_of_the_violation():

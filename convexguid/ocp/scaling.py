@@ -135,15 +135,27 @@ def following_plan(program: Transcription, z: np.ndarray) -> Transcription | Non
     return restated
 
 
+RAN_AWAY = 1e6
+"""A state this many times its scale is no size to state: the plan ran away (:func:`scale_advice`)."""
+
+
 def scale_advice(program: Transcription, z: np.ndarray) -> str:
     """A clause naming each state whose scale was estimated (not stated) and that the plan ``z`` outgrew more than
     :data:`FOLLOW_FACTOR` times (those :func:`followed_scales` would move), with its scale and size; "" when none
     did. Told with a run that did not end verified: Park and Ramirez's fed-batch volume, scaled by its initial
-    value 1, grew past 14."""
+    value 1, grew past 14. A plan beyond :data:`RAN_AWAY` times a scale ran away, and the clause says so instead:
+    Dymos' launch to orbit stated without a floor on the mass flew through zero mass to positions of 1e73 m,
+    which were no sizes to state."""
     followed = plan_scales(program, z)
     if followed is None:
         return ""
     sizes, scales = followed
-    grown = [f"{v.name} ({old:.3g}, reached {size:.3g})" for v, old, new, size in
-             zip(program.problem.states, program.state_scales, scales, sizes, strict=True) if new != old]
+    outgrown = [(v.name, old, size) for v, old, new, size in
+                zip(program.problem.states, program.state_scales, scales, sizes, strict=True) if new != old]
+    ran_away = [f"{name} {size:.3g}, {size / old:.3g} times its scale" for name, old, size in outgrown
+                if size > RAN_AWAY * old]
+    if ran_away:
+        return (f"the last plan ran away ({'; '.join(ran_away)}): not a scale to state, but what sent it there (a "
+                "state through zero in a division, a bound the physics needs)")
+    grown = [f"{name} ({old:.3g}, reached {size:.3g})" for name, old, size in outgrown]
     return f"the last plan outgrew the scales estimated for {', '.join(grown)}: state sizes with scale="
