@@ -209,8 +209,9 @@ class FunnelPolicy:
         """``(accepted, ratio, funnel)``: a step the merit's ratio test accepts, or else one :meth:`judge` accepts
         (with its ratio), unless it returns to a point an h-step left; and the funnel after it (an accepted h-step
         narrows it; an h-step the merit refused, or any step to less violation at a higher objective, remembers the
-        point it left). A refused step's ratio is at most 0 (the radius shrinks); the funnel then says whether only
-        a point left refused it, and how many times in a row (:attr:`Funnel.blocked`)."""
+        point it left). An accepted step's ratio is that of the rule that took it, the larger where both did; a
+        refused step's is at most 0 (the radius shrinks), and the funnel then says whether only a point left refused
+        it, and how many times in a row (:attr:`Funnel.blocked`)."""
         kind, ratio = self.judge(funnel.width, violation, violation_new, objective_drop, predicted_objective,
                                  predicted_violation)
         # a filter's test: no better in either measure than a point an h-step left (by a margin of its violation)
@@ -226,7 +227,9 @@ class FunnelPolicy:
             leaves = objective_drop < 0 or (kind == "h" and not merit_accepts)
             funnel = Funnel(self.narrowed(funnel.width, violation, violation_new) if kind == "h" else funnel.width,
                             funnel.left + ((violation, objective),) if leaves else funnel.left)
-        return True, (merit_ratio if merit_accepts else ratio), funnel
+        # both rules took it: the better ratio sizes the region (the merit's counts the violation's second-order
+        # growth as a loss the next step removes: the minimum time to climb crawled at a radius of 0.03)
+        return True, (max(merit_ratio, ratio) if kind is not None else merit_ratio if merit_accepts else ratio), funnel
 
 
 @dataclass(frozen=True)
