@@ -162,6 +162,35 @@ def test_a_thrust_cone_holds_between_the_nodes_of_a_quadratic_control():
     # tightened the cone by its excess between the samples (2e-5 longer)
 
 
+def test_a_throttle_annulus_holds_between_the_nodes_of_a_quadratic_control():
+    """A planar transfer at least energy with the thrust's magnitude between 0.5 and 1 (the lower limit nonconvex, as
+    a throttled engine's, and active all the way: the thrust turns at 0.5). An inequality on the controls alone is
+    known exactly wherever the controls are interpolated, so it is held at the six samples too (it was at the nodes
+    and midpoints only: the first plan's flown thrust dipped to 0.23 between them, and six repair rounds, margins and
+    then controls held linear, left the plan 2.3% above the optimum; a Mars powered descent's repair ran out of
+    rounds). The plan is IPOPT's on the same transcription."""
+    p = Problem("annulus")
+    x, y = p.state("x", initial=0.0, final=1.0), p.state("y", initial=0.0, final=0.0)
+    vx, vy = p.state("vx", initial=0.0, final=0.0), p.state("vy", initial=0.0, final=0.0)
+    ux, uy = p.control("ux", bounds=(-1.0, 1.0)), p.control("uy", bounds=(-1.0, 1.0))
+    p.dynamics({x: vx, y: vy, vx: ux, vy: uy})
+    p.path_constraint("throttle_min", 0.25 - (ux**2 + uy**2))
+    p.path_constraint("throttle_max", ux**2 + uy**2 - 1.0)
+    p.final_time(fixed=3.0)
+    p.minimize_energy()
+    p.transcription(12)
+    program = transcribe(p)
+    between = [label for label in program.path_labels if "between the nodes" in label]
+    assert len(between) == 2 * 12 * 6 and "throttle_min between the nodes of interval 0" in between
+    solution = p.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert len(solution.repair_rounds) <= 3
+    flown = np.hypot(solution.dense.columns["ux"], solution.dense.columns["uy"])
+    assert flown.min() >= 0.5 - 1e-6 and flown.max() <= 1.0
+    answer = solve_with_ipopt(program)
+    assert answer.success and solution.objective == pytest.approx(answer.objective, rel=1e-4)
+
+
 @pytest.mark.parametrize("rate", [2.0, -0.2])
 def test_a_plan_on_unstable_dynamics_is_judged_interval_by_interval_and_says_so(rate):
     """x' = a x + u from 1 to 0 in 20 s at least energy. With a = 2 the flight from the initial state amplifies the

@@ -246,10 +246,13 @@ class Transcription:
         constraints, cones, equalities = [], [], []
         cone_maps = {j: ca.Function(f"cone_{j}", [x, u], [ca.vertcat(*c.cone)]) for j, c in enumerate(p.constraints)
                      if c.cone is not None}
-        # a cone on the controls alone is affine in the control values wherever they are interpolated: held there too
-        # when the interpolant is curved (a quadratic through two values inside a cone may leave it between them)
+        # a cone or an inequality on the controls alone is known exactly wherever the controls are interpolated: held
+        # there too when the interpolant is curved (a quadratic through two values inside a cone or an annulus may
+        # leave it between them: a Mars descent's throttle limits, 4.5% under between nodes after eight repairs)
         control_cones = {j for j, c in enumerate(p.constraints) if c.cone is not None and self.INTERPOLATION_SAMPLES
                          and not ca.depends_on(ca.vertcat(*c.cone), x)}
+        control_rows = {j for j, c in enumerate(p.constraints) if c.cone is None and not c.equality
+                        and self.INTERPOLATION_SAMPLES and not ca.depends_on(c.expression, x)}
 
         def imposed(kind: str, k: int, share: float, state, control, time) -> None:
             for j, c in enumerate(p.constraints):
@@ -269,19 +272,25 @@ class Transcription:
         defect = ca.vertcat(*pieces)
         across = "at node" if len(pieces) == N + 1 else "across interval"
         self.defect_labels = tuple(f"{v.name} {across} {k}" for k in range(len(pieces)) for v in p.states)
-        where = {"node": "at node", "mid": "at the midpoint of interval"}
-        self.path_labels = tuple(f"{p.constraints[j].name} {where.get(kind, 'between the nodes of interval')} {k}"
-                                 for kind, k, j in self.path_rows)
         shares = self.node_shares()
         for k in range(N):
-            applying = [j for j in sorted(control_cones) if p.constraints[j].applies(float(shares[k]), False)]
+            applying = [j for j in sorted(control_cones | control_rows)
+                        if p.constraints[j].applies(float(shares[k]), False)]
             for share in self.INTERPOLATION_SAMPLES if applying else ():
                 sampled = ca.vertcat(*(sum(weight * z[column] for column, weight in zip(
                     self.interval_control_columns(k, i), self.interval_weights(share), strict=True))
                     for i in range(self.nu)))
+                time = tf * float(shares[k] + share * (shares[k + 1] - shares[k]))
                 for j in applying:
-                    self.cone_rows.append(("sample", k, j))
-                    cones.append(cone_maps[j](ca.SX.zeros(self.nx), sampled))
+                    if j in control_rows:
+                        self.path_rows.append(("sample", k, j))
+                        constraints.append(g[j](ca.SX.zeros(self.nx), sampled, time) / self.path_divisors[j])
+                    else:
+                        self.cone_rows.append(("sample", k, j))
+                        cones.append(cone_maps[j](ca.SX.zeros(self.nx), sampled))
+        where = {"node": "at node", "mid": "at the midpoint of interval"}
+        self.path_labels = tuple(f"{p.constraints[j].name} {where.get(kind, 'between the nodes of interval')} {k}"
+                                 for kind, k, j in self.path_rows)
         path = ca.vertcat(*constraints) if constraints else ca.SX(0, 1)
         path_equalities = ca.vertcat(*equalities) if equalities else ca.SX(0, 1)
         boundary, self.boundary_equality_rows = nonlinear_equalities(self, X, tf)
