@@ -458,6 +458,26 @@ def test_a_path_constraint_the_plan_lands_on_is_judged_net_of_the_flights_final_
     assert any(r.startswith("floor judged on the last interval net of the flight's miss") for r in verification.remarks)
 
 
+def test_the_check_reports_a_constraint_broken_in_the_unit_it_is_stated_in():
+    """A ceiling stated with a magnitude of 100 (its rows judged in tenths: 'Units of a constraint' in docs/ocp.md)
+    and broken by the guess's flight (x' = 1 from 0 for 1 s) by 0.5 of its own unit: the verification says 0.5, not
+    the 0.05 it is judged in (a Mars descent's thrust limit in N^2, broken by 2.6e7 N^2, was reported broken "by
+    0.43")."""
+    p = Problem("ceiling")
+    x = p.state("x", initial=0.0, final=1.0)
+    u = p.control("u", guess=1.0)
+    p.dynamics({x: u})
+    p.path_constraint("ceiling", x - 0.5, unit="m", scale=100.0)
+    p.final_time(fixed=1.0)
+    p.minimize_energy()
+    p.transcription(8)
+    program = transcribe(p)
+    assert program.path_divisors[0] == pytest.approx(10.0)
+    verification = DenseChecker(20).check(program, program.initial_guess()).verification
+    ceiling = {c.name: c for c in verification.checks}["ceiling"]
+    assert not ceiling.held and ceiling.worst == pytest.approx(0.5, rel=1e-9) and ceiling.violation == ceiling.worst
+
+
 def psopt_missile() -> Problem:
     """PSOPT's missile terminal burn (examples/missile; Subchan & Zbikowski, Computational Optimal Control, 2009):
     minimum time to a vertical impact at x = 10 km, with a load limit and an altitude floor (30 m until x = 7.5 km, by

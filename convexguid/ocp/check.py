@@ -175,7 +175,9 @@ class DenseChecker:
         excess = net_of_final_miss(program, track, stated)
         held = {key: not np.any(e > self._tolerance(p, key)) for key, e in excess.items()}
         broken = not all(held.values())
-        checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()), 0.0, "max", held[("path", j)])
+        # judged in each constraint's divided unit, reported in its stated one
+        units = self._judging_units(program, track)
+        checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()) * units[j], 0.0, "max", held[("path", j)])
                   for j, c in enumerate(p.constraints) if c.judged]
         for i, v in enumerate(p.states):
             if v.upper is not None:
@@ -334,6 +336,14 @@ class DenseChecker:
         return {j: float(m) if m > 0 else 1.0 for j, m in zip(indices, largest, strict=True)}
 
     @staticmethod
+    def _judging_units(program: Transcription, track: DenseTrack) -> list[float]:
+        """What each path constraint's excess is divided by to be judged (an equality's magnitude on the track, an
+        inequality's divisor: 'Units of a constraint' in docs/ocp.md), in its stated unit."""
+        magnitude = DenseChecker._equality_magnitudes(program, track)
+        return [magnitude[j] if c.equality else float(program.path_divisors[j])
+                for j, c in enumerate(program.problem.constraints)]
+
+    @staticmethod
     def _excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:
         """:meth:`_stated_excess`, judged on the last interval net of the flight's miss of the stated final values
         where the plan ends on a bound or a path constraint (:func:`~convexguid.ocp.pinned.net_of_final_miss`)."""
@@ -350,13 +360,12 @@ class DenseChecker:
             g = NumericFunction(program.constraint_values)
             values = np.array([g(x, u, t) for t, x, u in zip(track.t, track.x, track.u, strict=True)])
             share = track.t / track.t[-1]
-            magnitude = DenseChecker._equality_magnitudes(program, track)
+            units = DenseChecker._judging_units(program, track)
             nearest_node = np.min(np.abs(share[:, None] - program.node_shares()[None, :]), axis=1) < 1e-9
             for j, c in enumerate(p.constraints):
                 inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None
                           else (share >= c.during[0] - 1e-12) & (share <= c.during[1] + 1e-12))
-                excess = (np.abs(values[:, j]) / magnitude[j] if c.equality
-                          else values[:, j] / program.path_divisors[j])
+                excess = (np.abs(values[:, j]) if c.equality else values[:, j]) / units[j]
                 out[("path", j)] = np.where(inside & c.judged, excess, -np.inf)
         for i, v in enumerate(p.states):
             if v.upper is not None:
