@@ -234,6 +234,34 @@ def test_a_control_stated_without_bounds_is_swept_a_scale_either_side_of_its_gue
     assert solution.iterations < 40
 
 
+def test_an_unbounded_control_is_scaled_by_what_the_straight_line_asks_of_it():
+    """CTProblems.jl's minimum-energy transfer to the geostationary orbit (orbital_transfert_energy: km and hours,
+    planar two-body, unbounded thrust, a circular final orbit of radius 42165 km stated as nonlinear end conditions).
+    The straight line holds the spacecraft still at its initial state, against a gravity of mu / r^2 = 2.9e3 km/h^2:
+    scaled by 1, the thrust and the cost scaled from it crawled to ``max_iterations`` (the cost grew by 10 trust radii
+    an iteration). Scaled by what the guess asks of it, it converges, at a cheaper local minimum than the published
+    extremal (2711522.79, 2.07 revolutions, its costate flown; here 1.28 revolutions, final longitude free: IPOPT on
+    400 intervals from this plan, 1270754)."""
+    mu, rf, x0, vy0 = 5.1658620912e12, 42165.0, -42272.67, -5796.72
+    alpha = math.sqrt(mu / rf**3)
+    p = Problem("geostationary-transfer")
+    x, y = p.state("x", initial=x0, unit="km"), p.state("y", initial=0.0, unit="km")
+    vx, vy = p.state("vx", initial=0.0, unit="km/h"), p.state("vy", initial=vy0, unit="km/h")
+    u1, u2 = p.control("u1", unit="km/h^2"), p.control("u2", unit="km/h^2")
+    r3 = (x**2 + y**2) ** 1.5
+    p.dynamics({x: vx, y: vy, vx: -mu * x / r3 + u1, vy: -mu * y / r3 + u2})
+    p.boundary_constraint("radius", ca.sqrt(x**2 + y**2) - rf, at="final")
+    p.boundary_constraint("circular", ca.vertcat(vx + alpha * y, vy - alpha * x), at="final")
+    p.final_time(fixed=20.0)
+    cost = p.minimize_integral(0.5 * (u1**2 + u2**2), name="J")
+    p.transcription(30)
+    assert transcribe(p).control_scales == pytest.approx([mu / x0**2, 1.0], rel=1e-9)
+    solution = p.solve()
+    assert solution.status == "converged" and solution.verification.passed, solution.message
+    assert solution.nodes.columns[str(cost)][-1] == pytest.approx(1270754.0, rel=1e-5)
+    assert solution.iterations < 200
+
+
 def test_the_penalty_is_steered_up_when_the_region_allowed_far_more_feasibility_than_the_step_took():
     """As in dynamic soaring's stall (docs/engine.md, 'Penalty weight'): a step on the trust region's boundary keeps
     nearly all of a violation of 0.07, of which the feasibility step in the same region removes 3.4%."""
@@ -417,7 +445,9 @@ def test_a_stated_size_is_kept_when_the_rate_only_pulls_the_state_back():
     """Betts' and GPOPS-II's hypersensitive problem: x' = -x^3 + u from 1 to 1.5 over 10000. Its rate on the guess,
     3.4, sustained over the horizon would reach 33750, which replaced the stated 1.5 and made every subproblem fail;
     the rate pulls x back within 1 / |df/dx| = 0.15, so 1.5 stays. The integral of x^2 + u^2, with nothing stated,
-    is still scaled by its rate over the horizon, the unbounded u swept to its guess 0 plus or minus its scale 1."""
+    is still scaled by its rate over the horizon, the unbounded u swept to its guess 0 plus or minus its scale: what
+    the straight line asks of it, u = x^3 + x' at x = 1.5 (scaled by 1, the 100-interval plan ended
+    `max_iterations`; so, converged at 3.36284 in 192 iterations; published 3.3620563)."""
     problem = Problem("hypersensitive")
     x = problem.state("x", initial=1.0, final=1.5)
     u = problem.control("u")
@@ -425,7 +455,9 @@ def test_a_stated_size_is_kept_when_the_rate_only_pulls_the_state_back():
     problem.final_time(fixed=10000.0)
     problem.minimize_integral(0.5 * (x**2 + u**2), name="J")
     x_scale, cost_scale = problem.state_scales()
-    assert x_scale == 1.5 and cost_scale == pytest.approx(10000.0 * 0.5 * (1.5**2 + 1.0**2))
+    u_scale = 1.5**3 + 0.5 / 10000.0
+    assert transcribe(problem).control_scales == pytest.approx([u_scale], rel=1e-12)
+    assert x_scale == 1.5 and cost_scale == pytest.approx(10000.0 * 0.5 * (1.5**2 + u_scale**2))
 
 
 def _minimum_time_beside_ipopt(build):

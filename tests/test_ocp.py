@@ -572,8 +572,8 @@ def test_a_run_that_ends_short_names_the_estimated_scales_its_plan_outgrew():
     assert estimated.status == stated.status == "max_iterations"
     reached = float(np.max(np.abs(estimated.nodes.columns["v"])))
     assert reached > 0.4
-    assert f"the last plan outgrew the scales estimated for v (0.1, reached {reached:.3g}): state sizes with scale=" \
-        in estimated.message, estimated.message
+    assert f"the last plan outgrew the scales estimated for v (0.1, reached {reached:.3g}): state their sizes " \
+        "(p.state(..., scale=))" in estimated.message, estimated.message
     assert "outgrew" not in stated.message, stated.message
 
 

@@ -25,6 +25,8 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
+from convexguid.ocp.scaling import implied_control_scales
+
 if TYPE_CHECKING:  # the problem module imports this one
     from convexguid.ocp.problem import Problem
 
@@ -49,15 +51,14 @@ def control_periods(problem: Problem, turning: list[int]) -> tuple[float | None,
 
 
 def control_scales(problem: Problem, turning: list[int]) -> np.ndarray:
-    """Each control's scale: as stated or estimated (:meth:`~convexguid.ocp.problem.Problem.control`), except that a
-    bounded angle that a turn changes nothing of, bounded more than a turn wide, is measured in radians. Scaled by its
-    bounds, the trust region let it jump by whole turns: the PROPT/PSOPT obstacle avoidance, a heading within
-    [-10, 10] rad, held -4.47 and 0.82 at neighbouring nodes after eight iterations, and the flight between them
-    swept through every heading. ``turning``: :func:`turning_controls`."""
-    scales = np.array([v.scale for v in problem.controls], dtype=float)
-    for j in turning:
-        v = problem.controls[j]
-        if v.scale_from != "stated" and v.lower is not None and v.upper is not None:
+    """Each control's scale: as stated or estimated (:func:`~convexguid.ocp.scaling.implied_control_scales`), except
+    that an angle that a turn changes nothing of, unbounded or bounded more than a turn wide, is measured in radians.
+    Scaled by its bounds, the trust region let it jump by whole turns: the PROPT/PSOPT obstacle avoidance, a heading
+    within [-10, 10] rad, held -4.47 and 0.82 at neighbouring nodes after eight iterations, and the flight between
+    them swept through every heading. ``turning``: :func:`turning_controls`."""
+    scales = implied_control_scales(problem)
+    for j in turning:  # bounded (its bounds' magnitude) or not (the size the guess asks of it): in radians
+        if problem.controls[j].scale_from != "stated":
             scales[j] = min(scales[j], 1.0)
     return scales
 

@@ -19,6 +19,9 @@ values (``scale_from == "values"``) or 1 (``"none"``), and the rate estimate rep
   10000) has :math:`|f| = 3.4` on its guess: over the horizon that is 33750, which replaced the stated 1.5 and made
   every subproblem fail; the relaxation time 0.15 keeps 1.5.
 
+A control swept so has its stated scale, or its bounds' largest magnitude, or without either (and no period) the
+size the straight-line guess asks of it (:func:`implied_control_scales`).
+
 A user's guess (``Problem.initial_guess``) says more than the rate: a state it moves gets the largest magnitude of
 its guessed values in place of the rate's change (at least its stated values; at least 1 when nothing is stated).
 Dymos' cannonball, its speed guessed at 150-200 m/s and nothing stated of its size, was scaled by 1 and ran off to a
@@ -51,6 +54,34 @@ NEGLIGIBLE = 1e-4
 over the horizon."""
 
 
+def implied_control_scales(problem: Problem) -> np.ndarray:
+    """Each control's scale: as stated, else the largest magnitude of its bounds; a control with neither and no period
+    (scaled by 1) takes the size the straight-line guess asks of it where that is above 1: the least-squares control
+    that makes the guess's rates its slopes (the rows each divided by its state's stated size), its largest magnitude
+    over five instants. The straight line of CTProblems' minimum-energy transfer to the geostationary orbit holds
+    the spacecraft still against a gravity of 2.9e3 km/h^2; its thrust, unbounded, scaled by 1, and its cost scaled
+    from that, crawled to ``max_iterations`` (the cost grew by 10 trust radii an iteration)."""
+    scales = np.array([v.scale for v in problem.controls], dtype=float)
+    unknown = [j for j, v in enumerate(problem.controls) if v.scale_from == "none" and v.period is None]
+    if not unknown:
+        return scales
+    horizon = problem.tf if problem.tf is not None else problem.tf_guess
+    start, end, guess = problem.straight_line()
+    x, u, t = problem.state_vector(), problem.control_vector(), problem.time
+    rate = ca.Function("rate", [x, u, t], [problem.rate_vector(), ca.jacobian(problem.rate_vector(), u)])
+    rows = 1.0 / np.array([v.scale for v in problem.states])
+    size = np.zeros(len(problem.controls))
+    for share in np.linspace(0.0, 1.0, 5):
+        value, jacobian = (np.asarray(a, dtype=float) for a in rate(start + share * (end - start), guess,
+                                                                      share * horizon))
+        wanted = rows * ((end - start) / horizon - value.ravel())
+        if np.all(np.isfinite(wanted)) and np.all(np.isfinite(jacobian)):
+            change = np.linalg.lstsq(rows[:, None] * jacobian, wanted, rcond=None)[0]
+            size = np.maximum(size, np.abs(guess + change))
+    scales[unknown] = np.maximum(scales[unknown], size[unknown])
+    return scales
+
+
 def estimated_scales(problem: Problem) -> np.ndarray:
     """Each state's magnitude (the module docstring)."""
     scales = np.array([v.scale for v in problem.states])
@@ -60,8 +91,8 @@ def estimated_scales(problem: Problem) -> np.ndarray:
     horizon = problem.tf if problem.tf is not None else problem.tf_guess
     start, end, guess = problem.straight_line()
     samples = [guess]
-    for j, v in enumerate(problem.controls):
-        samples += [np.where(np.arange(guess.size) == j, value, guess) for value in swept_values(v, guess[j])]
+    for j, (v, scale) in enumerate(zip(problem.controls, implied_control_scales(problem), strict=True)):
+        samples += [np.where(np.arange(guess.size) == j, value, guess) for value in swept_values(v, guess[j], scale)]
     x, u, t = problem.state_vector(), problem.control_vector(), problem.time
     rate = ca.Function("rate", [x, u, t], [problem.rate_vector(), ca.diag(ca.jacobian(problem.rate_vector(), x))])
     change, reach = np.zeros(len(problem.states)), np.zeros(len(problem.states))
@@ -84,13 +115,13 @@ def estimated_scales(problem: Problem) -> np.ndarray:
     return scales
 
 
-def swept_values(control: Variable, guess: float) -> np.ndarray:
+def swept_values(control: Variable, guess: float, scale: float) -> np.ndarray:
     """Nine values across a control's range for the rate estimate: between its bounds; where a bound is not stated,
-    its guess less (or plus) its scale stands for it. Betts' linear tangent steering states its angle without bounds
-    and guesses 0, where the vertical speed's rate is 0: swept only at its guess, that speed was scaled by 1 and
+    its guess less (or plus) its ``scale`` stands for it. Betts' linear tangent steering states its angle without
+    bounds and guesses 0, where the vertical speed's rate is 0: swept only at its guess, that speed was scaled by 1 and
     reached 14 (132 SCP iterations, IPOPT 8; with it, 8)."""
-    lower = control.lower if control.lower is not None else guess - control.scale
-    upper = control.upper if control.upper is not None else guess + control.scale
+    lower = control.lower if control.lower is not None else guess - scale
+    upper = control.upper if control.upper is not None else guess + scale
     return np.linspace(lower, max(upper, lower), 9)
 
 
@@ -158,4 +189,5 @@ def scale_advice(program: Transcription, z: np.ndarray) -> str:
         return (f"the last plan ran away ({'; '.join(ran_away)}): not a scale to state, but what sent it there (a "
                 "state through zero in a division, a bound the physics needs)")
     grown = [f"{name} ({old:.3g}, reached {size:.3g})" for name, old, size in outgrown]
-    return f"the last plan outgrew the scales estimated for {', '.join(grown)}: state sizes with scale="
+    return (f"the last plan outgrew the scales estimated for {', '.join(grown)}: state their sizes (p.state(..., "
+            "scale=)), and those of the controls that drive them (p.control(..., scale=))")
