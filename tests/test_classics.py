@@ -15,6 +15,7 @@ from example_modules import load_example
 from convexguid.classics.bench import published_figure
 from convexguid.errors import SolverError
 from convexguid.ocp import Phases, Problem
+from convexguid.ocp.guess import unflyable
 from convexguid.ocp.reference import solve_with_ipopt
 from convexguid.ocp.solve import transcribe
 from convexguid.scp.check_repair import Check, Repair, solve_verified
@@ -256,10 +257,42 @@ def test_an_unbounded_control_is_scaled_by_what_the_straight_line_asks_of_it():
     cost = p.minimize_integral(0.5 * (u1**2 + u2**2), name="J")
     p.transcription(30)
     assert transcribe(p).control_scales == pytest.approx([mu / x0**2, 1.0], rel=1e-9)
+    assert not unflyable(p)  # the thrust unbounded can hold it still: the straight line stays the guess
     solution = p.solve()
     assert solution.status == "converged" and solution.verification.passed, solution.message
     assert solution.nodes.columns[str(cost)][-1] == pytest.approx(1270754.0, rel=1e-5)
     assert solution.iterations < 200
+
+
+def test_a_straight_line_the_controls_cannot_fly_is_replaced_by_the_flight_under_the_guessed_controls():
+    """CTProblems.jl's minimum-time transfer to the geostationary orbit (orbital_transfert_time; the thrust bounded by
+    648 km/h^2, nothing of the final state stated but a circular orbit of radius 42165 km). Its straight line holds
+    the spacecraft still, which asks 2.9e3 km/h^2 of the thrust: the run ended `infeasible` on a local certificate.
+    The guess is the coast from the initial state instead, the Keplerian transfer orbit it starts on (apogee 42273 km,
+    perigee near 6740 km): its angular momentum and energy are kept at every node, to the integration's error. (From
+    it the run converges and verifies at 13.403204 h on 50 intervals in 116 iterations, the published 13.403182:
+    docs/ocp.md, the `p.initial_guess` row.)"""
+    mu, rf, x0, vy0, gamma = 5.1658620912e12, 42165.0, -42272.67, -5796.72, 648.0
+    alpha = math.sqrt(mu / rf**3)
+    p = Problem("geostationary-transfer-time")
+    x, y = p.state("x", initial=x0, unit="km"), p.state("y", initial=0.0, unit="km")
+    vx, vy = p.state("vx", initial=0.0, unit="km/h"), p.state("vy", initial=vy0, unit="km/h")
+    u1, u2 = p.control("u1", bounds=(-gamma, gamma)), p.control("u2", bounds=(-gamma, gamma))
+    r3 = (x**2 + y**2) ** 1.5
+    p.dynamics({x: vx, y: vy, vx: -mu * x / r3 + u1, vy: -mu * y / r3 + u2})
+    p.cone_constraint("thrust", [u1, u2], gamma)
+    p.boundary_constraint("final_orbit", [ca.sqrt(x**2 + y**2) - rf, vx + alpha * y, vy - alpha * x], at="final")
+    p.final_time(bounds=(1.0, 100.0), guess=15.0)
+    p.minimize_time()
+    p.transcription(30)
+    assert unflyable(p)
+    program = transcribe(p)
+    states = program.states(program.initial_guess())
+    momentum = states[:, 0] * states[:, 3] - states[:, 1] * states[:, 2]
+    energy = 0.5 * (states[:, 2] ** 2 + states[:, 3] ** 2) - mu / np.hypot(states[:, 0], states[:, 1])
+    # (four Runge-Kutta steps an interval: the energy drifts 1.2% through the perigee)
+    assert np.allclose(momentum, momentum[0], rtol=2e-3) and np.allclose(energy, energy[0], rtol=2e-2)
+    assert np.hypot(states[:, 0], states[:, 1]).min() < 0.2 * abs(x0)  # past its perigee
 
 
 def test_the_penalty_is_steered_up_when_the_region_allowed_far_more_feasibility_than_the_step_took():

@@ -7,7 +7,10 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
+from convexguid.ocp.scaling import straight_line_controls
+
 if TYPE_CHECKING:
+    from convexguid.ocp.problem import Problem
     from convexguid.ocp.transcription import Transcription
 
 
@@ -18,19 +21,56 @@ def flown_free_states(program: Transcription, z: np.ndarray) -> np.ndarray:
     zero starts the SCP with defects it cannot remove within its trust region, and it shortens the final time
     instead (measured: COPS' hang glider ended `max_iterations` at 332 m; flown, it converges at 1247.9966 m in 99
     iterations). A state a control drives stays on the straight line: its rate along the guessed control is a guess
-    too (flown at the mid bank angle, Betts' shuttle turned the wrong way and ended `max_iterations`)."""
+    too (flown at the mid bank angle, Betts' shuttle turned the wrong way and ended `max_iterations`), unless the
+    straight line cannot be flown at all (:func:`unflyable`): then every state is flown."""
     p, u = program.problem, program.problem.control_vector()
     driven = np.array([u.shape[0] > 0 and ca.depends_on(p.rates[v.name], u) for v in p.states], dtype=bool)
-    free = np.array([v.final is None for v in p.states]) & ~driven
+    whole = unflyable(p)
+    free = np.array([v.final is None for v in p.states]) & (~driven | whole)
     if not free.any():
         return z
     states, control = program.states(z).copy(), p.straight_line()[2]
     times = program.node_shares() * program.final_time(z)
     low, high = p.bounds_array(p.states)
     for k in range(program.N):
-        rate = np.asarray(program.rate(states[k], control, times[k]), dtype=float).ravel()
-        step = np.clip(states[k] + (times[k + 1] - times[k]) * rate, low, high)
+        step = np.clip(_flown(program, states[k], control, times[k], times[k + 1], 4 if whole else 1), low, high)
         if not np.all(np.isfinite(step[free])):
             break
         states[k + 1, free] = step[free]
     return program.assemble(states, program.control_values(z), program.final_time(z))
+
+
+def unflyable(problem: Problem) -> bool:
+    """Whether nothing pins the end (no state has a final value) and the straight line, which then holds every state
+    at its initial value, asks for controls outside their bounds (beyond 1e-6 of their scales:
+    :func:`~convexguid.ocp.scaling.straight_line_controls`). Its guess is then the flight from the initial state under
+    the guessed controls, which the vehicle can fly. CTProblems' minimum-time transfer to the geostationary orbit, its
+    thrust bounded by 648 km/h^2, was held still on its straight line against a gravity of 2.9e3 km/h^2: `infeasible`
+    on a local certificate (IPOPT on the same program: `Infeasible_Problem_Detected`); from the coasting orbit,
+    converged and verified at 13.403204 h (the published 13.403182). Its minimum-energy twin, the thrust unbounded,
+    can hold still and keeps the straight line: from the coast it crawled to `max_iterations`."""
+    if problem.controls == [] or any(v.final is not None for v in problem.states):
+        return False
+    asked = straight_line_controls(problem)
+    low, high = problem.bounds_array(problem.controls)
+    margin = 1e-6 * np.array([v.scale for v in problem.controls])
+    return bool(np.any((asked < low - margin) | (asked > high + margin)))
+
+
+def _flown(program: Transcription, x: np.ndarray, control: np.ndarray, t: float, t_next: float,
+           steps: int) -> np.ndarray:
+    """``x`` flown from ``t`` to ``t_next`` under ``control``: forward Euler in one step, else classical Runge-Kutta
+    in ``steps``."""
+    def rate(state, time):
+        return np.asarray(program.rate(state, control, time), dtype=float).ravel()
+
+    h = (t_next - t) / steps
+    if steps == 1:
+        return x + h * rate(x, t)
+    for _ in range(steps):
+        k1 = rate(x, t)
+        k2 = rate(x + h / 2 * k1, t + h / 2)
+        k3 = rate(x + h / 2 * k2, t + h / 2)
+        k4 = rate(x + h * k3, t + h)
+        x, t = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + h
+    return x

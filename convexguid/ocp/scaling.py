@@ -65,21 +65,28 @@ def implied_control_scales(problem: Problem) -> np.ndarray:
     unknown = [j for j, v in enumerate(problem.controls) if v.scale_from == "none" and v.period is None]
     if not unknown:
         return scales
+    size = np.max(np.abs(straight_line_controls(problem)), axis=0, initial=0.0)
+    scales[unknown] = np.maximum(scales[unknown], size[unknown])
+    return scales
+
+
+def straight_line_controls(problem: Problem) -> np.ndarray:
+    """The controls the straight-line guess asks for at five instants, one row each: the guessed controls moved by
+    the least-squares change that makes the guess's rates its slopes (the rows each divided by its state's stated
+    size; a row is left out where the rates are not numbers there)."""
     horizon = problem.tf if problem.tf is not None else problem.tf_guess
     start, end, guess = problem.straight_line()
     x, u, t = problem.state_vector(), problem.control_vector(), problem.time
     rate = ca.Function("rate", [x, u, t], [problem.rate_vector(), ca.jacobian(problem.rate_vector(), u)])
     rows = 1.0 / np.array([v.scale for v in problem.states])
-    size = np.zeros(len(problem.controls))
+    asked = []
     for share in np.linspace(0.0, 1.0, 5):
         value, jacobian = (np.asarray(a, dtype=float) for a in rate(start + share * (end - start), guess,
                                                                       share * horizon))
         wanted = rows * ((end - start) / horizon - value.ravel())
         if np.all(np.isfinite(wanted)) and np.all(np.isfinite(jacobian)):
-            change = np.linalg.lstsq(rows[:, None] * jacobian, wanted, rcond=None)[0]
-            size = np.maximum(size, np.abs(guess + change))
-    scales[unknown] = np.maximum(scales[unknown], size[unknown])
-    return scales
+            asked.append(guess + np.linalg.lstsq(rows[:, None] * jacobian, wanted, rcond=None)[0])
+    return np.array(asked).reshape(-1, guess.size)
 
 
 def estimated_scales(problem: Problem) -> np.ndarray:
