@@ -298,6 +298,17 @@ def test_a_derivative_that_is_not_a_number_at_the_iterate_is_named():
     assert "not a number at the start point, in dynamics_defects" in solution.message
 
 
+def test_a_later_final_time_replaces_an_earlier_one():
+    """Free, then fixed: the problem is of fixed time (the bounds were kept, and the final time was free and fixed at
+    once); fixed, then free: free, from the new guess."""
+    p = Problem("twice")
+    p.final_time(bounds=(1.0, 10.0), guess=3.0)
+    p.final_time(fixed=2.0)
+    assert not p.free_time and p.tf == 2.0
+    p.final_time(bounds=(1.0, 10.0), guess=4.0)
+    assert p.free_time and p.tf is None and p.tf_guess == 4.0
+
+
 def test_an_incomplete_problem_is_refused_before_the_solve():
     p = Problem("demo")
     x = p.state("x", initial=0.0, final=1.0)

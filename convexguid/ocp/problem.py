@@ -140,7 +140,8 @@ class Problem:
 
     def final_time(self, fixed: float | None = None, bounds: tuple[float, float] | None = None,
                    guess: float | None = None) -> None:
-        """The final time (the initial time is 0): ``fixed``, or free within ``bounds`` starting from ``guess``."""
+        """The final time (the initial time is 0): ``fixed``, or free within ``bounds`` starting from ``guess``; a
+        later call replaces an earlier one."""
         where = f"{self.name}: final_time"
         if (fixed is None) == (bounds is None):
             raise SpecError(f"{where}: give either fixed=<seconds> or bounds=(lower, upper)")
@@ -148,6 +149,7 @@ class Problem:
             self.tf = number(f"{where}: fixed", fixed, allow_none=False)
             if self.tf <= 0:
                 raise SpecError(f"{where}: fixed: must be positive (got {self.tf:g})")
+            self.tf_bounds = None
             return
         low, high = number(f"{where}: bounds", bounds[0], allow_none=False), number(f"{where}: bounds", bounds[1])
         if not 0 < low < (math.inf if high is None else high):
@@ -156,7 +158,7 @@ class Problem:
                             "guess where the source says 0)")
         if high is None and guess is None:
             raise SpecError(f"{where}: guess: needed when the final time has no upper bound")
-        self.tf_bounds = (low, math.inf if high is None else high)
+        self.tf, self.tf_bounds = None, (low, math.inf if high is None else high)
         self.tf_guess = number(f"{where}: guess", guess) or 0.5 * (low + high)
 
     def dynamics(self, rates: Mapping[ca.SX, ca.SX]) -> None:
