@@ -433,12 +433,14 @@ class SCPAlgorithm:
                 finish_optimal(self, state)
             elif certified_by_fitted_multipliers(self, state):
                 pass  # finished: the fitted multipliers make it a KKT point
-            elif self.second_order is not None and state.polish < POLISH_ITERATIONS:
-                # a small step is not yet proof of optimality: polish on (the curved subproblem); a trust
-                # region that collapsed on ratios of round-off-sized decreases opens again
+            elif self.second_order is not None and state.polish < POLISH_ITERATIONS and not (
+                    self.trust_region.collapsed(state.radius) and state.reopened_at is not None
+                    and np.array_equal(state.reopened_at, state.x)):
+                # a small step is no proof of optimality: polish on (the curved subproblem); a region collapsed on
+                # round-off-sized decreases opens again, once at a point (docs/engine.md, 'Polish')
                 state.polish += 1
                 if self.trust_region.collapsed(state.radius):
-                    state.radius = self.trust_region.initial
+                    state.radius, state.reopened_at = self.trust_region.initial, state.x.copy()
             else:
                 state.finish("unverified", f"{why}; not proved optimal: KKT residuals above tolerance "
                                            f"{s.kkt_tolerance:g} (stationarity {state.kkt.relative_stationarity:.2g}, "

@@ -67,6 +67,8 @@ class IterationState:
     whose merit fell far more than predicted (its curvature is more than the problem's): the model is wrong."""
     curved_refused_at: np.ndarray | None = None
     """The iterate where a curved step inside its trust region was refused: the same QP there gives it again."""
+    reopened_at: np.ndarray | None = None
+    """The iterate where the polish last opened a collapsed trust region again (:meth:`SCPAlgorithm._stalled`)."""
     escape_log: list[str] = field(default_factory=list)
     iteration: int = 0
     failures: int = 0
