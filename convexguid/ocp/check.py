@@ -171,12 +171,11 @@ class DenseChecker:
     def check(self, program: Transcription, z: np.ndarray) -> Check:
         p = program.problem
         track, flight = self.flown(program, z)
-        stated = self._stated_excess(program, track)
+        units = self._judging_units(program, track)  # judged in each constraint's divided unit, reported in its own
+        stated = self._stated_excess(program, track, units)
         excess = net_of_final_miss(program, track, stated)
         held = {key: not np.any(e > self._tolerance(p, key)) for key, e in excess.items()}
         broken = not all(held.values())
-        # judged in each constraint's divided unit, reported in its stated one
-        units = self._judging_units(program, track)
         checks = [ConstraintCheck(c.name, float(excess[("path", j)].max()) * units[j], 0.0, "max", held[("path", j)])
                   for j, c in enumerate(p.constraints) if c.judged]
         for i, v in enumerate(p.states):
@@ -350,17 +349,18 @@ class DenseChecker:
         return net_of_final_miss(program, track, DenseChecker._stated_excess(program, track))
 
     @staticmethod
-    def _stated_excess(program: Transcription, track: DenseTrack) -> dict[tuple, np.ndarray]:
+    def _stated_excess(program: Transcription, track: DenseTrack,
+                       units: list[float] | None = None) -> dict[tuple, np.ndarray]:
         """Each path constraint's and state bound's excess on the dense grid, by ``("path", j)`` or
         ``("bound", (state, is_upper))``; a constraint imposed over part of the maneuver (or at one node) is
-        ``-inf`` on the samples outside it."""
+        ``-inf`` on the samples outside it; ``units``: :meth:`_judging_units` on this track, if already known."""
         p = program.problem
         out: dict[tuple, np.ndarray] = {}
         if program.constraint_values is not None:
             g = NumericFunction(program.constraint_values)
             values = np.array([g(x, u, t) for t, x, u in zip(track.t, track.x, track.u, strict=True)])
             share = track.t / track.t[-1]
-            units = DenseChecker._judging_units(program, track)
+            units = DenseChecker._judging_units(program, track) if units is None else units
             nearest_node = np.min(np.abs(share[:, None] - program.node_shares()[None, :]), axis=1) < 1e-9
             for j, c in enumerate(p.constraints):
                 inside = (nearest_node & (np.abs(share - c.at) < 1e-9) if c.at is not None

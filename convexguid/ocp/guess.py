@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
+from convexguid.ocp.parts import runge_kutta
 from convexguid.ocp.scaling import straight_line_controls
 
 if TYPE_CHECKING:
@@ -32,8 +33,13 @@ def flown_free_states(program: Transcription, z: np.ndarray) -> np.ndarray:
     states, control = program.states(z).copy(), p.straight_line()[2]
     times = program.node_shares() * program.final_time(z)
     low, high = p.bounds_array(p.states)
+    def rate(x: np.ndarray, t: float) -> np.ndarray:
+        return np.asarray(program.rate(x, control, t), dtype=float).ravel()
+
     for k in range(program.N):
-        step = np.clip(_flown(program, states[k], control, times[k], times[k + 1], 4 if whole else 1), low, high)
+        h = times[k + 1] - times[k]  # the whole state by Runge-Kutta, four steps an interval; a position by Euler
+        flown = runge_kutta(rate, states[k], h / 4, 4, times[k]) if whole else states[k] + h * rate(states[k], times[k])
+        step = np.clip(flown, low, high)
         if not np.all(np.isfinite(step[free])):
             break
         states[k + 1, free] = step[free]
@@ -56,21 +62,3 @@ def unflyable(problem: Problem) -> bool:
     margin = 1e-6 * np.array([v.scale for v in problem.controls])
     return bool(np.any((asked < low - margin) | (asked > high + margin)))
 
-
-def _flown(program: Transcription, x: np.ndarray, control: np.ndarray, t: float, t_next: float,
-           steps: int) -> np.ndarray:
-    """``x`` flown from ``t`` to ``t_next`` under ``control``: forward Euler in one step, else classical Runge-Kutta
-    in ``steps``."""
-    def rate(state, time):
-        return np.asarray(program.rate(state, control, time), dtype=float).ravel()
-
-    h = (t_next - t) / steps
-    if steps == 1:
-        return x + h * rate(x, t)
-    for _ in range(steps):
-        k1 = rate(x, t)
-        k2 = rate(x + h / 2 * k1, t + h / 2)
-        k3 = rate(x + h / 2 * k2, t + h / 2)
-        k4 = rate(x + h * k3, t + h)
-        x, t = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + h
-    return x

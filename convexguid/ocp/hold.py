@@ -25,6 +25,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from convexguid.ocp.parts import runge_kutta
 from convexguid.ocp.transcription import Symbols, Transcription
 
 
@@ -55,15 +56,7 @@ class HoldProgram(Transcription):
             control = ua + (tau / h) * (ub - ua) if self.order == 1 else ua
             return self.rate(x, control, t0 + tau)
 
-        x = x0
-        for i in range(steps):
-            tau = i * dt
-            k1 = rate(x, tau)
-            k2 = rate(x + dt / 2 * k1, tau + dt / 2)
-            k3 = rate(x + dt / 2 * k2, tau + dt / 2)
-            k4 = rate(x + dt * k3, tau + dt)
-            x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        return ca.Function("flow", [x0, ua, ub, t0, h], [x])
+        return ca.Function("flow", [x0, ua, ub, t0, h], [runge_kutta(rate, x0, dt, steps)])
 
     def _interval_controls(self, V, k: int):
         """The held control's start and end values on interval ``k`` (columns of ``V``)."""

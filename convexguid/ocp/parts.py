@@ -1,6 +1,7 @@
 """The pieces a transcription is built from that are not the transcription: the CasADi sparsity pattern of a
 Jacobian block, the derivatives kept for the next statement of the same graph, the repair margins, the symbolic NLP
-it hands to an independent solver, and the cones as one affine map in their own scales."""
+it hands to an independent solver, the cones as one affine map in their own scales, and classical Runge-Kutta steps
+(a hold's flow, symbolic; a first guess's flight, numeric)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,19 @@ import numpy as np
 import scipy.sparse as sp
 
 from convexguid.scp.problem import ConeBlock
+
+
+def runge_kutta(rate: Callable, x, step, steps: int, start=None):
+    """``x`` after ``steps`` classical Runge-Kutta steps of length ``step`` under ``rate(x, t)``, the times counted
+    from ``start`` (from 0 without one); on CasADi symbols and on NumPy arrays alike."""
+    for i in range(steps):
+        t = i * step if start is None else start + i * step
+        k1 = rate(x, t)
+        k2 = rate(x + step / 2 * k1, t + step / 2)
+        k3 = rate(x + step / 2 * k2, t + step / 2)
+        k4 = rate(x + step * k3, t + step)
+        x = x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return x
 
 
 class SparsityPattern:
